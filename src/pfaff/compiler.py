@@ -1,0 +1,104 @@
+"""The compile stage: parameter values checked, kernels generated, a :class:`NumericModel` built."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import sympy as sp
+
+from .codegen import Kernel, constraint_layout, dynamics_layout, energy_exprs, make_kernel
+from .derive import Block
+from .errors import ParameterError
+from .numeric import ConstraintPart, DynamicsPart, NumericModel
+
+if TYPE_CHECKING:
+    from .equations import EquationsOfMotion
+
+
+def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
+    """Check and order parameter values: every symbol needed, none unknown, all finite reals."""
+    if not isinstance(given, dict):
+        raise ParameterError(f"`parameters` must be a dict of symbol (or name) -> value, got {given!r}")
+    by_name = {p.name: p for p in params}
+    values: dict[sp.Symbol, object] = {}
+    problems = []
+    for key, val in given.items():
+        sym = by_name.get(key) if isinstance(key, str) else key
+        if sym not in params:
+            problems.append(f"unknown parameter `{key}` (the model's are: {', '.join(by_name) or 'none'})")
+            continue
+        values[sym] = val
+    missing = [p.name for p in params if p not in values]
+    if missing:
+        problems.append(f"missing value for {', '.join(f'`{m}`' for m in missing)}")
+    out = []
+    for p in params:
+        if p not in values:
+            continue
+        v = values[p]
+        try:
+            fv = float(sp.sympify(v)) if isinstance(v, sp.Basic) else float(v)
+        except (TypeError, ValueError):
+            problems.append(f"parameter `{p}` must be a real number, got {v!r}")
+            continue
+        if not math.isfinite(fv):
+            problems.append(f"parameter `{p}` is {fv} (NaN or infinite)")
+        out.append(fv)
+    if problems:
+        raise ParameterError("bad parameters: " + "; ".join(problems))
+    return out
+
+
+def _cached(block: Block, what: str, params: tuple, build) -> Kernel:
+    cache = block.__dict__.setdefault("_kernels", {})
+    key = (what, params)
+    if key not in cache:
+        cache[key] = build()
+    return cache[key]
+
+
+def dynamics_part(block: Block, params: tuple) -> DynamicsPart:
+    """Kernel and scatter indices for a dynamics block."""
+    mass, fidx, exprs = dynamics_layout(block)
+    kern = _cached(block, "dyn", params, lambda: make_kernel(block, exprs, params))
+    energy = _cached(block, "energy", params, lambda: make_kernel(block, energy_exprs(block), params))
+    c = block.coords
+    mr = np.array([c[:, a] for a, _ in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
+    mc = np.array([c[:, b] for _, b in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
+    fr = np.array([c[:, a] for a in fidx], dtype=np.int64).reshape(len(fidx), c.shape[0])
+    return DynamicsPart(kern, mr, mc, fr, energy)
+
+
+def constraint_part(block: Block, params: tuple) -> ConstraintPart:
+    """Kernel and scatter indices for a constraint block."""
+    cols, exprs = constraint_layout(block)
+    kern = _cached(block, "con", params, lambda: make_kernel(block, exprs, params))
+    c = block.coords
+    ac = np.array([c[:, a] for a in cols], dtype=np.int64).reshape(len(cols), c.shape[0])
+    return ConstraintPart(kern, block.rows, ac)
+
+
+def build_model(
+    eom: EquationsOfMotion, values: list[float], *, constraints_only: bool = False
+) -> NumericModel:
+    """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values."""
+    params = tuple(eom.parameters)
+    dyn = [] if constraints_only else [
+        dynamics_part(b, params) for b in eom.blocks if b.local.kind == "dynamics"
+    ]
+    con = [constraint_part(b, params) for b in eom.blocks if b.local.kind == "constraint"]
+    names = {
+        "coordinates": [str(q.func) for q in eom.coordinates],
+        "multipliers": [str(s) for s in eom.multipliers],
+        "constraints": list(eom.constraint_names),
+        "holonomic_rows": np.array(eom.holonomic, dtype=bool),
+        "parameters": {p.name: v for p, v in zip(params, values, strict=True)},
+    }
+    return NumericModel(eom.n, dyn, con, eom.m, values, names)
+
+
+def compile_equations(eom: EquationsOfMotion, parameters: dict) -> NumericModel:
+    """Check ``parameters`` against the model's symbols and compile (see EquationsOfMotion.compile)."""
+    return build_model(eom, parameter_values(tuple(eom.parameters), parameters))

@@ -1,0 +1,201 @@
+"""The derivation stage: per-template Lagrange terms, grouped into blocks.
+
+For each distinct local form (template) of a model piece the terms of
+
+    M q̈ + h = Q + Aᵀλ,    A q̈ + (Ȧ q̇ + ḃ) = 0
+
+are derived once, in local placeholder coordinates. A particle of mass m at r(q,t) contributes
+M = m JᵀJ and h = m Jᵀ(J̇ q̇ + ṙ_t) with J = ∂r/∂q; a Lagrangian term L contributes M = ∂²L/∂q̇²,
+h = (∂²L/∂q̇∂q) q̇ + ∂²L/∂q̇∂t - ∂L/∂q; a force F at r contributes Q = Jᵀ F. Nothing is ever
+differentiated or simplified at the size of the whole system.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+import sympy as sp
+
+from .symbols import local_q, local_qd, t
+
+if TYPE_CHECKING:
+    from .equations import EquationsOfMotion
+    from .system import Piece, System
+
+_TRIG = (sp.sin, sp.cos, sp.tan)
+
+
+@dataclass
+class Local:
+    """Symbolic contributions of one template, in local coordinates ``_q0, _q1, ...``.
+
+    ``mass`` holds both (a, b) and (b, a) entries; ``forcing`` is Q - h. Constraint templates fill
+    ``A``, ``b``, ``bias`` (= Ȧq̇ + ḃ) and, when holonomic, ``f``.
+    """
+
+    kind: str
+    k: int
+    mass: dict[tuple[int, int], sp.Expr] = field(default_factory=dict)
+    h: dict[int, sp.Expr] = field(default_factory=dict)
+    Q: dict[int, sp.Expr] = field(default_factory=dict)
+    kinetic: sp.Expr = sp.S.Zero
+    potential: sp.Expr = sp.S.Zero
+    A: dict[int, sp.Expr] = field(default_factory=dict)
+    b: sp.Expr = sp.S.Zero
+    bias: sp.Expr = sp.S.Zero
+    f: sp.Expr | None = None
+
+    @property
+    def forcing(self) -> dict[int, sp.Expr]:
+        """Q - h by local coordinate."""
+        out = dict(self.Q)
+        for a, e in self.h.items():
+            out[a] = out.get(a, sp.S.Zero) - e
+        return {a: e for a, e in out.items() if e != 0}
+
+
+@dataclass
+class Block:
+    """A template and the instances that share it.
+
+    Attributes
+    ----------
+    local : Local
+        The derived template.
+    coords : ndarray of int, shape (n_inst, k)
+        Global coordinate index of each local coordinate, per instance.
+    rows : ndarray of int, shape (n_inst,) or None
+        Global constraint (multiplier) index per instance, for constraint blocks.
+    pieces : list of Piece
+        The model pieces of the instances.
+    """
+
+    local: Local
+    coords: np.ndarray
+    rows: np.ndarray | None
+    pieces: list
+
+
+def _tidy(e: sp.Expr) -> sp.Expr:
+    """Cheap per-template clean-up: combine sin² + cos² in small expressions."""
+    if e.has(*_TRIG) and sp.count_ops(e) <= 80:
+        s = sp.trigsimp(e)
+        if sp.count_ops(s) <= sp.count_ops(e):
+            return s
+    return e
+
+
+def _qs(k: int) -> tuple[list[sp.Symbol], list[sp.Symbol]]:
+    return [local_q(a) for a in range(k)], [local_qd(a) for a in range(k)]
+
+
+def dt_bias(e: sp.Expr, k: int) -> sp.Expr:
+    """Time derivative of e(q, q̇, t) with q̈ = 0: Σ ∂e/∂q_a q̇_a + ∂e/∂t."""
+    q, qd = _qs(k)
+    return sp.Add(*(e.diff(q[a]) * qd[a] for a in range(k)), e.diff(t))
+
+
+def _particle(key: tuple, k: int) -> Local:
+    m, r = key[2], key[3:]
+    q, qd = _qs(k)
+    J = [[rc.diff(q[a]) for a in range(k)] for rc in r]
+    v = [sp.Add(*(Jc[a] * qd[a] for a in range(k)), rc.diff(t)) for Jc, rc in zip(J, r, strict=True)]
+    acc = [dt_bias(vc, k) for vc in v]
+    loc = Local("dynamics", k, kinetic=m * sp.Add(*(vc**2 for vc in v)) / 2)
+    for a in range(k):
+        for b in range(a, k):
+            e = _tidy(m * sp.Add(*(Jc[a] * Jc[b] for Jc in J)))
+            if e != 0:
+                loc.mass[a, b] = loc.mass[b, a] = e
+        e = _tidy(m * sp.Add(*(Jc[a] * ac for Jc, ac in zip(J, acc, strict=True))))
+        if e != 0:
+            loc.h[a] = e
+    return loc
+
+
+def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
+    q, qd = _qs(k)
+    for a in range(k):
+        p = L.diff(qd[a])
+        for b in range(k):
+            e = p.diff(qd[b])
+            if e != 0:
+                loc.mass[a, b] = _tidy(e)
+        e = sp.Add(*(p.diff(q[b]) * qd[b] for b in range(k)), p.diff(t), -L.diff(q[a]))
+        if e != 0:
+            loc.h[a] = _tidy(e)
+    return loc
+
+
+def _force(key: tuple, k: int) -> Local:
+    dim = key[1]
+    F, r = key[2 : 2 + dim], key[2 + dim :]
+    q, _ = _qs(k)
+    loc = Local("dynamics", k)
+    for a in range(k):
+        e = sp.Add(*(Fc * rc.diff(q[a]) for Fc, rc in zip(F, r, strict=True)))
+        if e != 0:
+            loc.Q[a] = e
+    return loc
+
+
+def _constraint(key: tuple, k: int) -> Local:
+    q, qd = _qs(k)
+    e = key[2]
+    loc = Local("constraint", k)
+    if key[0] == "holonomic":
+        loc.f = e
+        loc.A = {a: d for a in range(k) if (d := e.diff(q[a])) != 0}
+        loc.b = e.diff(t)
+        g = sp.Add(*(loc.A[a] * qd[a] for a in loc.A), loc.b)
+    else:
+        loc.A = {a: d for a in range(k) if (d := e.diff(qd[a])) != 0}
+        loc.b = e.xreplace(dict.fromkeys(qd, sp.S.Zero))
+        g = e
+    loc.bias = dt_bias(g, k)
+    return loc
+
+
+def derive_template(key: tuple, k: int) -> Local:
+    """Derive the local contributions of one template (see the module docstring)."""
+    kind = key[0]
+    if kind == "particle":
+        return _particle(key, k)
+    if kind == "kinetic":
+        return _lagrangian(key[2], k, Local("dynamics", k, kinetic=key[2]))
+    if kind == "potential":
+        return _lagrangian(-key[2], k, Local("dynamics", k, potential=key[2]))
+    if kind == "force":
+        return _force(key, k)
+    if kind == "genforce":
+        return Local("dynamics", k, Q={key[1]: key[2]})
+    return _constraint(key, k)
+
+
+def group(system: System) -> list[Block]:
+    """Group the model's pieces by template and derive each template once."""
+    groups: dict[tuple, list[tuple[Piece, int]]] = {}
+    row = 0
+    for p in system.pieces:
+        is_con = p.kind in ("holonomic", "velocity")
+        groups.setdefault(p.key, []).append((p, row if is_con else -1))
+        row += is_con
+    blocks = []
+    for key, members in groups.items():
+        local = derive_template(key, len(members[0][0].coords))
+        coords = np.array([p.coords for p, _ in members], dtype=np.int64).reshape(len(members), -1)
+        rows = np.array([r for _, r in members], dtype=np.int64) if local.kind == "constraint" else None
+        blocks.append(Block(local, coords, rows, [p for p, _ in members]))
+    return blocks
+
+
+def derive(system: System) -> EquationsOfMotion:
+    """Derive the equations of motion of ``system`` and check its constraints for redundancy."""
+    from .equations import EquationsOfMotion
+    from .rank import check_constraint_rank
+
+    eom = EquationsOfMotion(system, group(system))
+    check_constraint_rank(eom)
+    return eom

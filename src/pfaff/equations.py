@@ -1,0 +1,359 @@
+"""The derivation result: Lagrange's equations with multipliers as named SymPy matrices."""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+import sympy as sp
+from sympy.physics.vector.printing import vlatex
+
+from .derive import Block, Local
+from .symbols import local_q, local_qd, t
+
+if TYPE_CHECKING:
+    from .numeric import NumericModel
+    from .system import System
+
+DENSE_SYMBOLIC_LIMIT = 500  # above this many coordinates, matrices are ImmutableSparseMatrix
+SOLVE_LIMIT = 40  # largest n + m for the symbolic solve
+
+
+class Solution(dict):
+    """Symbolic q̈ and λ: a dict keyed by ``q.diff(t, 2)`` and multiplier symbols.
+
+    Attributes ``accelerations`` (Matrix, n×1) and ``multipliers`` (Matrix, m×1) give the same values
+    in coordinate and constraint order.
+    """
+
+    accelerations: sp.Matrix
+    multipliers: sp.Matrix
+
+
+class EquationsOfMotion:
+    """Lagrange's equations with multipliers in block form.
+
+    The canonical form is
+
+        M(q,t) q̈ + h(q,q̇,t) = Q(q,q̇,t) + A(q,t)ᵀ λ
+        A(q,t) q̈ + Ȧ q̇ + ḃ = 0            (differentiated Pfaffian constraints A q̇ + b = 0)
+
+    i.e. the augmented (KKT) system [[M, -Aᵀ], [A, 0]] [q̈; λ] = [Q - h; -(Ȧq̇ + ḃ)]. For a
+    holonomic constraint f(q,t) = 0, A = ∂f/∂q and b = ∂f/∂t, so Aᵀλ is the generalized constraint
+    force. Matrices are SymPy ``ImmutableMatrix`` (``ImmutableSparseMatrix`` beyond 500 coordinates)
+    in the user's coordinates (functions of :data:`pfaff.t`).
+
+    Attributes
+    ----------
+    coordinates : tuple of Function, length n
+    mass_matrix : Matrix, shape (n, n)
+        M.
+    velocity_terms : Matrix, shape (n, 1)
+        h: velocity products, explicit time dependence and ∂V/∂q.
+    generalized_forces : Matrix, shape (n, 1)
+        Q from applied forces (virtual work) and generalized forces.
+    forcing : Matrix, shape (n, 1)
+        Q - h.
+    constraint_matrix : Matrix, shape (m, n)
+        A.
+    constraint_bias : Matrix, shape (m, 1)
+        b.
+    acceleration_constraints : Matrix, shape (m, 1)
+        A q̈ + Ȧ q̇ + ḃ (each entry = 0).
+    multipliers : tuple of Symbol, length m
+        λ, one per constraint, in the order the constraints were added.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> eom = pfaff.models.cartesian_pendulum().equations()
+    >>> eom.lagrange_equations[1]
+    Eq(g*m + m*Derivative(y(t), (t, 2)), 2*lambda1*y(t))
+    """
+
+    def __init__(
+        self,
+        system: System | None,
+        blocks: list[Block],
+        *,
+        coordinates: tuple | None = None,
+        constraint_names: list[str] | None = None,
+        holonomic: list[bool] | None = None,
+        parameters: tuple | None = None,
+        extra: dict | None = None,
+    ) -> None:
+        self.system = system
+        self.blocks = blocks
+        if system is not None:
+            cons = system.constraints
+            coordinates = system.coordinates
+            constraint_names = [p.name for p in cons]
+            holonomic = [p.kind == "holonomic" for p in cons]
+            parameters = system.parameters
+        self.coordinates: tuple = tuple(coordinates or ())
+        self.speeds = tuple(q.diff(t) for q in self.coordinates)
+        self.accels = tuple(q.diff(t, 2) for q in self.coordinates)
+        self.constraint_names: list[str] = list(constraint_names or [])
+        self.holonomic: list[bool] = list(holonomic or [])
+        self.parameters: tuple = tuple(parameters or ())
+        self.multipliers: tuple[sp.Symbol, ...] = tuple(
+            sp.Symbol(f"lambda{i + 1}") for i in range(len(self.constraint_names))
+        )
+        self.extra = extra or {}
+
+    @property
+    def n(self) -> int:
+        """Number of coordinates."""
+        return len(self.coordinates)
+
+    @property
+    def m(self) -> int:
+        """Number of constraints (multipliers)."""
+        return len(self.multipliers)
+
+    # ------------------------------------------------------------------ assembly
+    @cached_property
+    def _assembled(self) -> dict:
+        n, m = self.n, self.m
+        mass: dict[tuple[int, int], list] = {}
+        h: list[list] = [[] for _ in range(n)]
+        Q: list[list] = [[] for _ in range(n)]
+        A: dict[tuple[int, int], sp.Expr] = {}
+        b, bias, f = [sp.S.Zero] * m, [sp.S.Zero] * m, [None] * m
+        T, V = [], []
+        for block in self.blocks:
+            loc = block.local
+            for i, idx in enumerate(block.coords):
+                rule = {}
+                for a, c in enumerate(idx):
+                    rule[local_q(a)] = self.coordinates[c]
+                    rule[local_qd(a)] = self.speeds[c]
+                if loc.kind == "constraint":
+                    r = int(block.rows[i])
+                    for a, e in loc.A.items():
+                        A[r, int(idx[a])] = e.xreplace(rule)
+                    b[r], bias[r] = loc.b.xreplace(rule), loc.bias.xreplace(rule)
+                    f[r] = None if loc.f is None else loc.f.xreplace(rule)
+                    continue
+                for (a, c), e in loc.mass.items():
+                    mass.setdefault((int(idx[a]), int(idx[c])), []).append(e.xreplace(rule))
+                for a, e in loc.h.items():
+                    h[idx[a]].append(e.xreplace(rule))
+                for a, e in loc.Q.items():
+                    Q[idx[a]].append(e.xreplace(rule))
+                T.append(loc.kinetic.xreplace(rule))
+                V.append(loc.potential.xreplace(rule))
+        mass_sum = {k: s for k, v in mass.items() if (s := sp.Add(*v)) != 0}
+        return {
+            "M": mass_sum,
+            "h": [sp.Add(*v) for v in h],
+            "Q": [sp.Add(*v) for v in Q],
+            "A": A,
+            "b": b,
+            "bias": bias,
+            "f": f,
+            "T": sp.Add(*T),
+            "V": sp.Add(*V),
+        }
+
+    def _matrix(self, rows: int, cols: int, entries: dict) -> sp.MatrixBase:
+        if max(rows, cols) > DENSE_SYMBOLIC_LIMIT:
+            return sp.ImmutableSparseMatrix(rows, cols, entries)
+        M = sp.zeros(rows, cols)
+        for (i, j), e in entries.items():
+            M[i, j] = e
+        return sp.ImmutableMatrix(M)
+
+    @cached_property
+    def mass_matrix(self) -> sp.MatrixBase:
+        """M, shape (n, n)."""
+        return self._matrix(self.n, self.n, self._assembled["M"])
+
+    @cached_property
+    def velocity_terms(self) -> sp.MatrixBase:
+        """h, shape (n, 1): velocity products, explicit time dependence and ∂V/∂q."""
+        return sp.ImmutableMatrix(self._assembled["h"]) if self.n else sp.ImmutableMatrix.zeros(0, 1)
+
+    @cached_property
+    def generalized_forces(self) -> sp.MatrixBase:
+        """Q, shape (n, 1): generalized applied forces by virtual work."""
+        return sp.ImmutableMatrix(self._assembled["Q"])
+
+    @cached_property
+    def forcing(self) -> sp.MatrixBase:
+        """Q - h, shape (n, 1)."""
+        return sp.ImmutableMatrix(
+            [q - h for q, h in zip(self._assembled["Q"], self._assembled["h"], strict=True)]
+        )
+
+    @cached_property
+    def constraint_matrix(self) -> sp.MatrixBase:
+        """A, shape (m, n)."""
+        return self._matrix(self.m, self.n, self._assembled["A"])
+
+    @cached_property
+    def constraint_bias(self) -> sp.MatrixBase:
+        """b, shape (m, 1), with A q̇ + b = 0."""
+        return sp.ImmutableMatrix(self.m, 1, self._assembled["b"])
+
+    @cached_property
+    def acceleration_constraints(self) -> sp.MatrixBase:
+        """A q̈ + Ȧ q̇ + ḃ, shape (m, 1); each entry vanishes on a motion."""
+        rows = [[] for _ in range(self.m)]
+        for (i, j), e in self._assembled["A"].items():
+            rows[i].append(e * self.accels[j])
+        return sp.ImmutableMatrix(
+            self.m, 1, [sp.Add(*r, c) for r, c in zip(rows, self._assembled["bias"], strict=True)]
+        )
+
+    @cached_property
+    def holonomic_constraints(self) -> list[sp.Expr | None]:
+        """f(q, t) of each holonomic constraint (None for a velocity constraint)."""
+        return list(self._assembled["f"])
+
+    @cached_property
+    def kinetic_energy(self) -> sp.Expr:
+        """T(q, q̇, t)."""
+        return self._assembled["T"]
+
+    @cached_property
+    def potential_energy(self) -> sp.Expr:
+        """V(q, t)."""
+        return self._assembled["V"]
+
+    @cached_property
+    def lagrange_equations(self) -> list[sp.Equality]:
+        """One ``Eq(M q̈ + h, Q + Aᵀλ)`` per coordinate."""
+        lhs: list[list] = [[] for _ in range(self.n)]
+        rhs: list[list] = [[q] for q in self._assembled["Q"]]
+        for (i, j), e in self._assembled["M"].items():
+            lhs[i].append(e * self.accels[j])
+        for (i, j), e in self._assembled["A"].items():
+            rhs[j].append(e * self.multipliers[i])
+        return [
+            sp.Eq(sp.Add(*lhs[j], self._assembled["h"][j]), sp.Add(*rhs[j]), evaluate=False)
+            for j in range(self.n)
+        ]
+
+    # ------------------------------------------------------------------ output
+    def latex(self, max_equations: int = 12) -> str:
+        """LaTeX ``align*`` of the Lagrange equations and acceleration constraints (dots for rates).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> print(pfaff.models.pendulum().equations().latex())  # doctest: +ELLIPSIS
+        \\begin{align*}
+        ...
+        """
+        lines = []
+        for eq in self.lagrange_equations[:max_equations]:
+            lines.append(f"{vlatex(eq.lhs)} &= {vlatex(eq.rhs)}")
+        if self.n > max_equations:
+            lines.append(rf"&\vdots \quad \text{{({self.n - max_equations} more)}}")
+        for e in list(self.acceleration_constraints)[:max_equations]:
+            lines.append(f"{vlatex(e)} &= 0")
+        if self.m > max_equations:
+            lines.append(rf"&\vdots \quad \text{{({self.m - max_equations} more)}}")
+        return "\\begin{align*}\n" + " \\\\\n".join(lines) + "\n\\end{align*}"
+
+    def _repr_latex_(self) -> str:
+        return "$$" + self.latex() + "$$"
+
+    def __repr__(self) -> str:
+        return f"<pfaff.EquationsOfMotion: {self.n} coordinates, {self.m} multipliers>"
+
+    # ------------------------------------------------------------------ solving
+    def solve(self, *, simplify: bool = False) -> Solution:
+        """Solve the augmented system symbolically for q̈ and λ (small systems only).
+
+        Uses an LU solve of [[M, -Aᵀ], [A, 0]]; M is never inverted.
+
+        Examples
+        --------
+        >>> import pfaff, sympy as sp
+        >>> x = pfaff.coordinates("x")
+        >>> s = pfaff.System([x]); s.add_particle(2, [x, 0]); s.add_generalized_force(x, 6)
+        >>> s.equations().solve()[x.diff(pfaff.t, 2)]
+        3
+        """
+        from .errors import PfaffError
+
+        n, m = self.n, self.m
+        if n + m > SOLVE_LIMIT:
+            raise PfaffError(
+                f"symbolic solve is for small systems (n + m <= {SOLVE_LIMIT}, here {n + m}); "
+                "use .compile(parameters).accelerations(t, q, qd)"
+            )
+        M, A = sp.Matrix(self.mass_matrix), sp.Matrix(self.constraint_matrix)
+        K = sp.zeros(n + m, n + m)
+        K[:n, :n] = M
+        K[:n, n:] = -A.T
+        K[n:, :n] = A
+        rhs = sp.Matrix.vstack(sp.Matrix(self.forcing), -sp.Matrix(self._assembled["bias"]) if m else sp.zeros(0, 1))
+        try:
+            sol = K.LUsolve(rhs)
+        except (ValueError, ZeroDivisionError) as e:
+            raise PfaffError(
+                "the augmented matrix is singular: redundant constraints or singular mass matrix"
+            ) from e
+        if simplify:
+            sol = sol.applyfunc(sp.simplify)
+        out = Solution(zip(self.accels + self.multipliers, sol, strict=True))
+        out.accelerations = sp.ImmutableMatrix(sol[:n])
+        out.multipliers = sp.ImmutableMatrix(m, 1, list(sol[n:]))
+        return out
+
+    def compile(self, parameters: dict | None = None) -> NumericModel:
+        """Compile to a :class:`pfaff.NumericModel` with the given parameter values.
+
+        Parameters
+        ----------
+        parameters : dict
+            Value for every symbol in :attr:`parameters`, keyed by Symbol or by name.
+        """
+        from .compiler import compile_equations
+
+        return compile_equations(self, parameters or {})
+
+    # ------------------------------------------------------------------ construction from matrices
+    @classmethod
+    def from_matrices(
+        cls,
+        coordinates: tuple,
+        mass: sp.MatrixBase,
+        h: sp.MatrixBase,
+        Q: sp.MatrixBase,
+        *,
+        kinetic: sp.Expr = sp.S.Zero,
+        potential: sp.Expr = sp.S.Zero,
+        parameters: tuple = (),
+        extra: dict | None = None,
+    ) -> EquationsOfMotion:
+        """Unconstrained equations M q̈ + h = Q given as whole matrices (used by reduction)."""
+        n = len(coordinates)
+        rule = {}
+        for a, q in enumerate(coordinates):
+            rule[q.diff(t)] = local_qd(a)
+            rule[q] = local_q(a)
+        loc = Local("dynamics", n)
+        for i in range(n):
+            for j in range(n):
+                if mass[i, j] != 0:
+                    loc.mass[i, j] = mass[i, j].xreplace(rule)
+            if h[i] != 0:
+                loc.h[i] = h[i].xreplace(rule)
+            if Q[i] != 0:
+                loc.Q[i] = Q[i].xreplace(rule)
+        loc.kinetic, loc.potential = kinetic.xreplace(rule), potential.xreplace(rule)
+        block = Block(loc, np.arange(n, dtype=np.int64).reshape(1, n), None, [])
+        return cls(
+            None,
+            [block],
+            coordinates=coordinates,
+            constraint_names=[],
+            holonomic=[],
+            parameters=parameters,
+            extra=extra,
+        )

@@ -1,0 +1,169 @@
+"""A zoo of ready models, used by the tests, the CLI, the docs and the benchmarks.
+
+Every function returns a :class:`pfaff.System`. Parameters given as SymPy symbols stay symbolic;
+numbers are built in. Default parameter symbols are plain (no assumptions), so ``sympy.symbols("M r")``
+made by a user compares equal to them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from .errors import ModelError
+from .symbols import coordinates
+from .system import System
+
+
+def _param(value: object, default: str) -> sp.Expr:
+    if value is None or value is True:
+        return sp.Symbol(default)
+    return sp.sympify(value)
+
+
+def rolling_ring(
+    n: int,
+    *,
+    mass: object = None,
+    radius: object = None,
+    force: object = None,
+    incline: object = None,
+    gravity: object = None,
+) -> System:
+    """The seed's ring of ``n`` particles rolling without slip on a line (DESIGN.md).
+
+    Coordinates q = (x, θ_1, …, θ_n); particle k (mass M/n) sits at (x + r sin θ_k, r cos θ_k), so
+    θ = 0 is the top and θ = π the contact point. Constraints (holonomic): ``no slip``
+    x - r θ_1 = 0 and ``spacing k`` θ_{k+1} - θ_k - 2π/n = 0 for k = 1 … n-1.
+
+    Parameters
+    ----------
+    n : int
+        Number of particles, n >= 2.
+    mass, radius : Expr or float, optional
+        Total mass ``M`` and radius ``r`` (default: symbols ``M``, ``r``).
+    force : Expr, float or True, optional
+        Horizontal push at the centre; ``True`` means the symbol ``F``. Expected: θ̈ = F/(2Mr),
+        ẍ = F/(2M), no-slip multiplier λ_1 = -F/2.
+    incline : Expr, float or True, optional
+        Incline angle (``True``: symbol ``alpha``); x then runs down the slope and gravity
+        ``g`` (or ``gravity``) acts on every particle. Expected: ẍ = g sin α / 2.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> ring = pfaff.models.rolling_ring(4, force=True)
+    >>> [str(p) for p in ring.parameters]
+    ['F', 'M', 'r']
+    """
+    if not isinstance(n, int | np.integer) or n < 2:
+        raise ModelError(f"`n` must be an integer >= 2 (number of particles), got {n!r}")
+    n = int(n)
+    M, r = _param(mass, "M"), _param(radius, "r")
+    qs = coordinates(f"x theta1:{n + 1}")
+    x, th = qs[0], qs[1:]
+    ring = System(qs, name=f"rolling ring, N={n}")
+    m = M / n
+    dth = 2 * sp.pi / n
+    for k in range(n):
+        ring.add_particle(m, [x + r * sp.sin(th[k]), r * sp.cos(th[k])], name=f"particle {k + 1}")
+    ring.add_holonomic_constraint(x - r * th[0], name="no slip")
+    for k in range(n - 1):
+        ring.add_holonomic_constraint(th[k + 1] - th[k] - dth, name=f"spacing {k + 1}")
+    if force is not None and force is not False:
+        ring.add_force([_param(force, "F"), 0], at=[x, 0], name="push")
+    if incline is not None and incline is not False:
+        a, g = _param(incline, "alpha"), _param(gravity, "g")
+        for k in range(n):
+            s_, h_ = x + r * sp.sin(th[k]), r * sp.cos(th[k])
+            ring.add_potential_energy(
+                -m * g * (s_ * sp.sin(a) - h_ * sp.cos(a)), name=f"gravity {k + 1}"
+            )
+    return ring
+
+
+def ring_state(
+    n: int, radius: float, theta: float = 0.0, theta_dot: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """A consistent state (q, q̇) of :func:`rolling_ring`: x = rθ, θ_k = θ + (k-1)2π/n.
+
+    Returns
+    -------
+    q, qd : ndarray, shape (n + 1,)
+
+    Examples
+    --------
+    >>> q, qd = ring_state(4, radius=0.5, theta=0.2, theta_dot=1.0)
+    >>> q.shape, float(qd[0])
+    ((5,), 0.5)
+    """
+    th = theta + 2 * np.pi * np.arange(n) / n
+    q = np.concatenate([[radius * theta], th])
+    qd = np.concatenate([[radius * theta_dot], np.full(n, float(theta_dot))])
+    return q, qd
+
+
+def rolling_ring_minimal(
+    *, mass: object = None, radius: object = None, force: object = None, incline: object = None,
+    gravity: object = None,
+) -> System:
+    """The ring in one coordinate θ: T = ½Mẋ² + ½Iθ̇² with ẋ = rθ̇ and I = Mr², i.e. T = Iθ̇².
+
+    Lagrange's equation is 2Iθ̈ = Q_θ; a push F at the centre gives Q_θ = F r. Parameters as in
+    :func:`rolling_ring`.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> pfaff.models.rolling_ring_minimal(force=True).equations().lagrange_equations[0]
+    Eq(2*M*r**2*Derivative(theta(t), (t, 2)), F*r)
+    """
+    M, r = _param(mass, "M"), _param(radius, "r")
+    th = coordinates("theta")
+    s = System([th], name="rolling ring, minimal")
+    s.add_kinetic_energy(M * r**2 * th.diff() ** 2, name="T = I θ̇²")
+    if force is not None and force is not False:
+        s.add_force([_param(force, "F"), 0], at=[r * th, 0], name="push")
+    if incline is not None and incline is not False:
+        a, g = _param(incline, "alpha"), _param(gravity, "g")
+        s.add_potential_energy(-M * g * r * th * sp.sin(a), name="gravity")
+    return s
+
+
+def cartesian_pendulum(*, mass: object = None, length: object = None, gravity: object = None) -> System:
+    """Point mass on a rod in Cartesian coordinates: q = (x, y), V = m g y, x² + y² - L² = 0.
+
+    The multiplier is λ = m(g y - ẋ² - ẏ²)/(2L²); the rod tension (pull towards the pivot) is
+    -2Lλ: m g hanging at rest, 3 m g at the bottom after release from horizontal rest.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> pfaff.models.cartesian_pendulum().equations().lagrange_equations[0]
+    Eq(m*Derivative(x(t), (t, 2)), 2*lambda1*x(t))
+    """
+    m, L, g = _param(mass, "m"), _param(length, "L"), _param(gravity, "g")
+    x, y = coordinates("x y")
+    s = System([x, y], name="Cartesian pendulum")
+    s.add_particle(m, [x, y], name="bob")
+    s.add_potential_energy(m * g * y, name="gravity")
+    s.add_holonomic_constraint(x**2 + y**2 - L**2, name="rod")
+    return s
+
+
+def pendulum(*, mass: object = None, length: object = None, gravity: object = None) -> System:
+    """Simple pendulum in its angle θ from the downward vertical: m L² θ̈ + m g L sin θ = 0.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> pfaff.models.pendulum().equations().lagrange_equations[0]
+    Eq(L**2*m*Derivative(theta(t), (t, 2)) + L*g*m*sin(theta(t)), 0)
+    """
+    m, L, g = _param(mass, "m"), _param(length, "L"), _param(gravity, "g")
+    th = coordinates("theta")
+    s = System([th], name="pendulum")
+    pos = [L * sp.sin(th), -L * sp.cos(th)]
+    s.add_particle(m, pos, name="bob")
+    s.add_potential_energy(m * g * pos[1], name="gravity")
+    return s

@@ -1,0 +1,301 @@
+"""The numeric model: compiled M, Q - h, A, b, bias, energy and residuals, and the KKT solve.
+
+No SymPy here: the compile stage hands over :class:`pfaff.codegen.Kernel` objects and index arrays.
+The augmented system is solved in its symmetric form
+
+    [[M, Aᵀ], [A, 0]] [q̈; -λ] = [Q - h; -(Ȧq̇ + ḃ)],
+
+densely for small systems and with SciPy's sparse LU (SuperLU) otherwise.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+from .codegen import Kernel
+from .errors import ConstraintError, StateError
+
+DENSE_LIMIT = 400  # n + m up to which the KKT system is assembled and solved densely
+
+
+@dataclass
+class DynamicsPart:
+    """A dynamics kernel with the global (row, col) of each mass entry and row of each forcing entry."""
+
+    kernel: Kernel
+    mass_rows: np.ndarray  # shape (n_mass, n_inst)
+    mass_cols: np.ndarray
+    forcing_rows: np.ndarray  # shape (n_forcing, n_inst)
+    energy: Kernel
+
+
+@dataclass
+class ConstraintPart:
+    """A constraint kernel: A entries (row, col), then b, bias and f per instance row."""
+
+    kernel: Kernel
+    rows: np.ndarray  # shape (n_inst,)
+    cols: np.ndarray  # shape (n_A, n_inst)
+
+
+def _slots(lin: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unique sorted linear indices and, per entry, its slot (duplicates are summed)."""
+    uniq, slot = np.unique(lin, return_inverse=True)
+    return uniq, slot.ravel()
+
+
+class NumericModel:
+    """Compiled equations of motion for one set of parameter values.
+
+    Attributes
+    ----------
+    n, m : int
+        Number of coordinates and of constraints (multipliers).
+    coordinate_names, multiplier_names : list of str
+    parameters : dict
+        Parameter name -> value used.
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
+    >>> qdd, lam = model.accelerations(0.0, np.array([0.0, -2.0]), np.zeros(2))
+    >>> float(-2 * 2 * lam[0])  # rod tension -2Lλ of a pendulum hanging at rest: mg
+    9.81
+    """
+
+    def __init__(
+        self,
+        n: int,
+        dyn: list[DynamicsPart],
+        con: list[ConstraintPart],
+        m: int,
+        param_values: Sequence[float],
+        names: dict,
+    ) -> None:
+        self.n, self.m = n, m
+        self._dyn, self._con, self._p = dyn, con, list(param_values)
+        self.coordinate_names: list[str] = names["coordinates"]
+        self.multiplier_names: list[str] = names["multipliers"]
+        self.constraint_names: list[str] = names["constraints"]
+        self.parameters: dict = names["parameters"]
+        self.holonomic = np.zeros(m, dtype=bool)
+        for part in con:
+            self.holonomic[part.rows] = names["holonomic_rows"][part.rows]
+        N = n + m
+        mr = [np.ravel(p.mass_rows) for p in dyn]
+        mc = [np.ravel(p.mass_cols) for p in dyn]
+        ar = [np.ravel(np.broadcast_to(p.rows, p.cols.shape)) for p in con]
+        ac = [np.ravel(p.cols) for p in con]
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, dtype=np.int64)  # noqa: E731
+        self._mr, self._mc, self._ar, self._ac = cat(mr), cat(mc), cat(ar), cat(ac)
+        rows = np.concatenate([self._mr, n + self._ar, self._ac])
+        cols = np.concatenate([self._mc, self._ac, n + self._ar])
+        self.dense = N <= DENSE_LIMIT
+        self._kkt_lin = cols * N + rows  # column-major: sorted order is CSC order
+        self._kkt_uniq, self._kkt_slot = _slots(self._kkt_lin, N * N)
+        self._frows = cat([np.ravel(p.forcing_rows) for p in dyn])
+        self.stats = {"kkt_solves": 0}
+
+    # ------------------------------------------------------------------ validation
+    def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
+        try:
+            tt = float(t)
+            qa = np.asarray(q, dtype=float)
+            qda = np.asarray(qd, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise StateError(f"`t`, `q` and `qd` must be real numbers and arrays: {e}") from e
+        for name, arr in (("q", qa), ("qd", qda)):
+            if arr.shape != (self.n,):
+                raise StateError(
+                    f"`{name}` must have shape ({self.n},) for coordinates "
+                    f"{', '.join(self.coordinate_names[:6])}{'...' if self.n > 6 else ''}; "
+                    f"got shape {arr.shape}"
+                )
+            if not np.all(np.isfinite(arr)):
+                raise StateError(f"`{name}` contains NaN or infinity")
+        if not np.isfinite(tt):
+            raise StateError("`t` is not finite")
+        return tt, qa, qda
+
+    # ------------------------------------------------------------------ raw evaluation
+    def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        mdata, fdata = [], []
+        for part in self._dyn:
+            outs = part.kernel(t, q, qd, self._p)
+            nm = part.mass_rows.shape[0]
+            mdata.extend(outs[:nm])
+            fdata.extend(outs[nm:])
+        mvals = np.concatenate(mdata) if mdata else np.zeros(0)
+        fvals = np.concatenate(fdata) if fdata else np.zeros(0)
+        forcing = np.bincount(self._frows, weights=fvals, minlength=self.n)
+        return mvals, forcing
+
+    def _constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, ...]:
+        adata = []
+        b, bias, f = np.zeros(self.m), np.zeros(self.m), np.zeros(self.m)
+        for part in self._con:
+            outs = part.kernel(t, q, qd, self._p)
+            na = part.cols.shape[0]
+            adata.extend(outs[:na])
+            b[part.rows], bias[part.rows], f[part.rows] = outs[na], outs[na + 1], outs[na + 2]
+        avals = np.concatenate(adata) if adata else np.zeros(0)
+        return avals, b, bias, f
+
+    # ------------------------------------------------------------------ public evaluation
+    def mass_matrix(self, t: float, q: object, qd: object | None = None) -> np.ndarray | sps.csr_matrix:
+        """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix."""
+        t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
+        M = sps.coo_matrix((self._dynamics(t, q, qd)[0], (self._mr, self._mc)), shape=(self.n,) * 2)
+        return M.toarray() if self.dense else M.tocsr()
+
+    def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
+        """Q - h, shape (n,)."""
+        return self._dynamics(*self._state(t, q, qd))[1]
+
+    def constraint_matrix(self, t: float, q: object) -> np.ndarray | sps.csr_matrix:
+        """A(q, t), shape (m, n): dense when small, else CSR."""
+        t, q, qd = self._state(t, q, np.zeros(self.n))
+        A = sps.coo_matrix((self._constraints(t, q, qd)[0], (self._ar, self._ac)), shape=(self.m, self.n))
+        return A.toarray() if self.dense else A.tocsr()
+
+    def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
+        """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
+        t, q, qd = self._state(t, q, qd)
+        avals, b, _, f = self._constraints(t, q, qd)
+        g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=self.m)
+        return f, g
+
+    def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
+        """Kinetic and potential energy (T, V)."""
+        t, q, qd = self._state(t, q, qd)
+        T = V = 0.0
+        for part in self._dyn:
+            Tk, Vk = part.energy(t, q, qd, self._p)
+            T += float(np.sum(Tk))
+            V += float(np.sum(Vk))
+        return T, V
+
+    def kkt_matrix(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """The symmetric augmented matrix [[M, Aᵀ], [A, 0]] and right-hand side [Q - h; -bias]."""
+        mvals, forcing = self._dynamics(t, q, qd)
+        avals, _, bias, _ = self._constraints(t, q, qd)
+        data = np.concatenate([mvals, avals, avals])
+        N = self.n + self.m
+        rhs = np.concatenate([forcing, -bias])
+        if self.dense:
+            K = np.bincount(self._kkt_lin, weights=data, minlength=N * N).reshape(N, N).T
+        else:
+            vals = np.bincount(self._kkt_slot, weights=data, minlength=len(self._kkt_uniq))
+            K = sps.csc_matrix((vals, self._kkt_uniq % N, _indptr(self._kkt_uniq // N, N)), shape=(N, N))
+        return K, rhs
+
+    def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
+        """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
+
+        Examples
+        --------
+        >>> import numpy as np, pfaff
+        >>> sys = pfaff.models.rolling_ring(8, force=True)
+        >>> model = sys.equations().compile({"M": 1, "r": 0.5, "F": 2})
+        >>> q = pfaff.models.ring_configuration(8, theta=0.3, radius=0.5)
+        >>> qdd, lam = model.accelerations(0.0, q, np.zeros(9))
+        >>> round(float(qdd[1]), 12), round(float(lam[0]), 12)
+        (2.0, -1.0)
+        """
+        t, q, qd = self._state(t, q, qd)
+        K, rhs = self.kkt_matrix(t, q, qd)
+        self.stats["kkt_solves"] += 1
+        try:
+            if self.dense:
+                sol = scipy.linalg.solve(K, rhs, assume_a="sym", check_finite=False)
+            else:
+                sol = spla.splu(K).solve(rhs)
+        except (np.linalg.LinAlgError, RuntimeError, scipy.linalg.LinAlgError) as e:
+            raise ConstraintError(self._singular_message(t, q)) from e
+        if not np.all(np.isfinite(sol)):
+            raise ConstraintError(self._singular_message(t, q))
+        return sol[: self.n], -sol[self.n :]
+
+    def _singular_message(self, t: float, q: np.ndarray) -> str:
+        return (
+            f"the augmented matrix [[M, Aᵀ], [A, 0]] is singular at t = {t:g}: the constraints are "
+            "redundant or inconsistent in this configuration, or M is singular on the admissible "
+            "motions (a coordinate without inertia)"
+        )
+
+
+def _indptr(col_of_entry: np.ndarray, N: int) -> np.ndarray:
+    return np.concatenate([[0], np.cumsum(np.bincount(col_of_entry, minlength=N))])
+
+
+def multipliers_by_back_substitution(
+    A: np.ndarray | sps.spmatrix, residual: np.ndarray
+) -> tuple[np.ndarray, list[int]]:
+    """Solve Aᵀλ = residual by peeling, as in the seed's "step backwards".
+
+    Repeatedly take a column of A in which exactly one not-yet-known multiplier appears, solve for
+    it, and move the known terms to the right-hand side. For the rolling ring this finds λ_N first,
+    then λ_{N-1}, …, and λ_1 (the no-slip friction) last; O(nnz) work.
+
+    Parameters
+    ----------
+    A : ndarray or sparse matrix, shape (m, n)
+    residual : ndarray, shape (n,)
+        M q̈ - (Q - h), the generalized constraint force Aᵀλ.
+
+    Returns
+    -------
+    lam : ndarray, shape (m,)
+    order : list of int
+        Multiplier indices in the order they were determined.
+
+    Raises
+    ------
+    ConstraintError
+        When no column isolates a single unknown multiplier (use the KKT solve instead).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A = np.array([[1.0, -2.0, 0.0], [0.0, -1.0, 1.0]])
+    >>> lam, order = multipliers_by_back_substitution(A, A.T @ np.array([3.0, 5.0]))
+    >>> lam.tolist(), order
+    ([3.0, 5.0], [1, 0])
+    """
+    Ac = sps.csc_matrix(A)
+    m, n = Ac.shape
+    rhs = np.array(residual, dtype=float)
+    lam = np.full(m, np.nan)
+    unknown_count = np.diff(Ac.indptr).astype(np.int64)
+    col_rows = [Ac.indices[Ac.indptr[j] : Ac.indptr[j + 1]] for j in range(n)]
+    col_vals = [Ac.data[Ac.indptr[j] : Ac.indptr[j + 1]] for j in range(n)]
+    Ar = sps.csr_matrix(A)
+    ready = [j for j in range(n) if unknown_count[j] == 1]
+    order: list[int] = []
+    while ready:
+        j = ready.pop()
+        if unknown_count[j] != 1:
+            continue
+        rows, vals = col_rows[j], col_vals[j]
+        mask = np.isnan(lam[rows])
+        i = int(rows[mask][0])
+        lam[i] = rhs[j] / vals[mask][0]
+        order.append(i)
+        cols = Ar.indices[Ar.indptr[i] : Ar.indptr[i + 1]]
+        vals_i = Ar.data[Ar.indptr[i] : Ar.indptr[i + 1]]
+        rhs[cols] -= vals_i * lam[i]
+        unknown_count[cols] -= 1
+        ready.extend(int(c) for c in cols if unknown_count[c] == 1)
+    if np.isnan(lam).any():
+        raise ConstraintError(
+            "the constraint matrix has no triangular structure for back-substitution; "
+            "use NumericModel.accelerations (KKT solve)"
+        )
+    return lam, order

@@ -1,0 +1,415 @@
+"""The model stage: a constrained mechanical system described by coordinates, energies, particles,
+constraints and forces.
+
+Each piece of the model is stored twice: as the user wrote it (global coordinates, for display and
+reduction) and in *local* form, with its own coordinates replaced by placeholders. Pieces with equal
+local forms share one symbolic derivation and one vectorized numeric kernel, so the symbolic work for a
+ring of N identical particles does not grow with N.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import sympy as sp
+from sympy.core.function import AppliedUndef
+from sympy.physics.vector import Vector
+
+from .errors import ConstraintError, ModelError, ModelTypeError
+from .symbols import as_expr, is_coordinate_like, local_q, local_qd, t, validate_coordinates
+
+if TYPE_CHECKING:
+    from .equations import EquationsOfMotion
+    from .work import ForceWork
+
+PIECE_KINDS = ("particle", "kinetic", "potential", "force", "genforce", "holonomic", "velocity")
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One term of a model, in global and local form.
+
+    Attributes
+    ----------
+    kind : str
+        One of ``particle``, ``kinetic``, ``potential``, ``force``, ``genforce``, ``holonomic``,
+        ``velocity``.
+    exprs : tuple of Expr
+        The expressions as given (global coordinates): mass then position for a particle, force
+        components then point components for a force, the single expression otherwise.
+    coords : tuple of int
+        Global indices of the coordinates the piece involves, ascending; local coordinate ``a`` is
+        ``coords[a]``.
+    key : tuple
+        Hashable local form: ``(kind, dim, local expressions...)``. Equal keys mean equal derivations.
+    name : str
+        A label for reports.
+    """
+
+    kind: str
+    exprs: tuple[sp.Expr, ...]
+    coords: tuple[int, ...]
+    key: tuple
+    name: str
+    dim: int = 0
+
+
+class System:
+    """A constrained mechanical system.
+
+    The equations pfaff derives are Lagrange's equations with multipliers,
+
+        M(q,t) q̈ + h(q,q̇,t) = Q(q,q̇,t) + A(q,t)ᵀ λ,    A q̈ + Ȧ q̇ + ḃ = 0,
+
+    for constraints in Pfaffian form A(q,t) q̇ + b(q,t) = 0. A holonomic constraint f(q,t) = 0 enters
+    with A = ∂f/∂q and b = ∂f/∂t, so Aᵀλ is the generalized constraint force (sign convention).
+
+    Parameters
+    ----------
+    coordinates : sequence of Function
+        Generalized coordinates q (n of them), each a function of :data:`pfaff.t`.
+
+    Examples
+    --------
+    >>> import sympy as sp, pfaff
+    >>> x, y = pfaff.coordinates("x y")
+    >>> m, g, L = sp.symbols("m g L", positive=True)
+    >>> pend = pfaff.System([x, y])
+    >>> pend.add_particle(m, [x, y])
+    >>> pend.add_potential_energy(m * g * y)
+    >>> pend.add_holonomic_constraint(x**2 + y**2 - L**2, name="rod")
+    >>> eom = pend.equations()
+    >>> eom.constraint_matrix
+    Matrix([[2*x(t), 2*y(t)]])
+    """
+
+    def __init__(self, coordinates: object, *, name: str = "system") -> None:
+        self.coordinates: tuple[sp.Function, ...] = validate_coordinates(coordinates)
+        self.speeds: tuple[sp.Expr, ...] = tuple(q.diff(t) for q in self.coordinates)
+        self.name = name
+        self._index = {q: i for i, q in enumerate(self.coordinates)}
+        self._speed_index = {qd: i for i, qd in enumerate(self.speeds)}
+        self.pieces: list[Piece] = []
+        self._parameters: set[sp.Symbol] = set()
+        self._constraint_keys: dict[tuple, str] = {}
+
+    # ------------------------------------------------------------------ inspection helpers
+    @property
+    def n(self) -> int:
+        """Number of generalized coordinates."""
+        return len(self.coordinates)
+
+    @property
+    def parameters(self) -> tuple[sp.Symbol, ...]:
+        """The free symbols of the model other than :data:`t`, sorted by name."""
+        return tuple(sorted(self._parameters, key=lambda s: s.name))
+
+    @property
+    def constraints(self) -> list[Piece]:
+        """Holonomic and velocity constraints in the order they were added (one multiplier each)."""
+        return [p for p in self.pieces if p.kind in ("holonomic", "velocity")]
+
+    def _scan(self, exprs: tuple[sp.Expr, ...], what: str, *, speeds: bool) -> tuple[int, ...]:
+        """Indices of the coordinates the expressions involve; reject foreign functions of time."""
+        used: set[int] = set()
+        problems: list[str] = []
+        for e in exprs:
+            for d in e.atoms(sp.Derivative):
+                if d in self._speed_index:
+                    if not speeds:
+                        problems.append(
+                            f"contains the velocity {d}; positions and holonomic constraints "
+                            "may depend on q and t only"
+                        )
+                    used.add(self._speed_index[d])
+                elif is_coordinate_like(d.expr) and d.expr in self._index:
+                    problems.append(f"contains the higher derivative {d}, which is not allowed")
+                else:
+                    problems.append(f"contains the derivative {d} of something that is not a coordinate")
+            for f in e.atoms(AppliedUndef):
+                if f in self._index:
+                    used.add(self._index[f])
+                elif not any(f in d.atoms(AppliedUndef) for d in e.atoms(sp.Derivative)):
+                    problems.append(
+                        f"depends on `{f}`, which is not a coordinate of this system "
+                        f"(coordinates: {', '.join(map(str, self.coordinates))})"
+                    )
+            for s in e.free_symbols:
+                if s != t:
+                    self._parameters.add(s)
+        if problems:
+            raise ModelError(f"{what}: " + "; ".join(dict.fromkeys(problems)))
+        return tuple(sorted(used))
+
+    def _localize(self, exprs: tuple[sp.Expr, ...], coords: tuple[int, ...]) -> tuple[sp.Expr, ...]:
+        rule: dict[sp.Basic, sp.Basic] = {}
+        for a, i in enumerate(coords):
+            rule[self.speeds[i]] = local_qd(a)
+            rule[self.coordinates[i]] = local_q(a)
+        return tuple(e.xreplace(rule) for e in exprs)
+
+    def _add(self, kind: str, exprs: tuple, coords: tuple[int, ...], name: str, dim: int = 0) -> Piece:
+        local = self._localize(exprs, coords)
+        piece = Piece(kind, exprs, coords, (kind, dim, *local), name, dim)
+        self.pieces.append(piece)
+        return piece
+
+    def _vector(self, value: object, what: str, frame: object) -> tuple[sp.Expr, ...]:
+        if isinstance(value, Vector):
+            frames = {f for _, f in value.args}
+            if frame is None:
+                if len(frames) != 1:
+                    raise ModelError(
+                        f"{what} is a sympy.physics.vector.Vector in {len(frames)} frames; pass "
+                        "`frame=` (the inertial frame) to take its components"
+                    )
+                frame = next(iter(frames))
+            comps = tuple(value.to_matrix(frame))
+        elif isinstance(value, sp.MatrixBase):
+            comps = tuple(value)
+        elif isinstance(value, list | tuple) or hasattr(value, "__array__"):
+            comps = tuple(value.tolist() if hasattr(value, "tolist") else value)
+        else:
+            raise ModelTypeError(
+                f"{what} must be a list of 2 or 3 expressions, a Matrix or a "
+                f"sympy.physics.vector.Vector, got {type(value).__name__}"
+            )
+        if len(comps) not in (2, 3):
+            raise ModelError(f"{what} must have 2 or 3 components (planar or spatial), got {len(comps)}")
+        return tuple(as_expr(c, f"{what} component {i}") for i, c in enumerate(comps))
+
+    def _label(self, name: str | None, kind: str) -> str:
+        if name is not None and not isinstance(name, str):
+            raise ModelTypeError(f"`name` must be a string, got {name!r}")
+        return name or f"{kind}{sum(p.kind == kind for p in self.pieces) + 1}"
+
+    # ------------------------------------------------------------------ building the model
+    def add_particle(
+        self, mass: object, position: object, *, name: str | None = None, frame: object = None
+    ) -> None:
+        """Add a point mass at ``position`` (inertial components, functions of q and t).
+
+        Parameters
+        ----------
+        mass : Expr or float
+            Constant mass (parameters only, no coordinates).
+        position : sequence of 2 or 3 Expr, Matrix, or sympy.physics.vector.Vector
+            Inertial position r(q, t). A Vector needs ``frame=`` when it spans several frames.
+        name : str, optional
+            Label used in reports.
+        frame : ReferenceFrame, optional
+            Inertial frame in which to take a Vector's components.
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> th, = pfaff.coordinates("theta:1")
+        >>> s = pfaff.System([th])
+        >>> s.add_particle(1, [sp.sin(th), -sp.cos(th)])
+        >>> s.equations().mass_matrix
+        Matrix([[1]])
+        """
+        label = self._label(name, "particle")
+        m = as_expr(mass, f"mass of particle `{label}`")
+        r = self._vector(position, f"position of particle `{label}`", frame)
+        if self._scan((m,), f"mass of particle `{label}`", speeds=False) or m.has(t):
+            raise ModelError(f"mass of particle `{label}` must be constant, got {m}")
+        if m.is_number and not m.is_positive:
+            raise ModelError(f"mass of particle `{label}` must be positive, got {m}")
+        coords = self._scan(r, f"position of particle `{label}`", speeds=False)
+        self._add("particle", (m, *r), coords, label, len(r))
+
+    def add_kinetic_energy(self, expr: object, *, name: str | None = None) -> None:
+        """Add a kinetic energy term T(q, q̇, t) (e.g. ``I*theta.diff(t)**2/2``).
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> th = pfaff.coordinates("theta")
+        >>> s = pfaff.System([th]); s.add_kinetic_energy(sp.Symbol("I") * th.diff(pfaff.t)**2)
+        >>> s.equations().mass_matrix
+        Matrix([[2*I]])
+        """
+        label = self._label(name, "kinetic")
+        e = as_expr(expr, f"kinetic energy `{label}`")
+        coords = self._scan((e,), f"kinetic energy `{label}`", speeds=True)
+        if not coords:
+            raise ModelError(f"kinetic energy `{label}` involves no coordinate: {e}")
+        self._add("kinetic", (e,), coords, label)
+
+    def add_potential_energy(self, expr: object, *, name: str | None = None) -> None:
+        """Add a potential energy term V(q, t); the Lagrangian is L = T - V.
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> y = pfaff.coordinates("y")
+        >>> s = pfaff.System([y]); s.add_particle(2, [0, y]); s.add_potential_energy(2 * 9.81 * y)
+        >>> s.equations().forcing
+        Matrix([[-19.62]])
+        """
+        label = self._label(name, "potential")
+        e = as_expr(expr, f"potential energy `{label}`")
+        coords = self._scan((e,), f"potential energy `{label}`", speeds=False)
+        if coords:
+            self._add("potential", (e,), coords, label)
+
+    def add_force(
+        self, force: object, at: object, *, name: str | None = None, frame: object = None
+    ) -> None:
+        """Add a force applied at the point with position ``at``.
+
+        Its generalized force is Q_j = F · ∂ṙ/∂q̇_j = F · ∂r/∂q_j (partial velocities).
+
+        Parameters
+        ----------
+        force : sequence of 2 or 3 Expr, Matrix or Vector
+            Force components in the inertial frame; may depend on q, q̇ and t.
+        at : sequence of 2 or 3 Expr, Matrix or Vector
+            Position r(q, t) of the material point the force acts on.
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> x = pfaff.coordinates("x")
+        >>> s = pfaff.System([x]); s.add_particle(1, [x, 0]); s.add_force([3, 0], at=[x, 0])
+        >>> s.equations().generalized_forces
+        Matrix([[3]])
+        """
+        label = self._label(name, "force")
+        f = self._vector(force, f"force `{label}`", frame)
+        r = self._vector(at, f"point of force `{label}`", frame)
+        if len(f) != len(r):
+            raise ModelError(
+                f"force `{label}` has {len(f)} components but its point has {len(r)}"
+            )
+        cf = self._scan(f, f"force `{label}`", speeds=True)
+        cr = self._scan(r, f"point of force `{label}`", speeds=False)
+        coords = tuple(sorted(set(cf) | set(cr)))
+        self._add("force", (*f, *r), coords, label, len(f))
+
+    def add_generalized_force(self, coordinate: object, expr: object, *, name: str | None = None) -> None:
+        """Add ``expr`` to the generalized force Q of ``coordinate`` (a torque for an angle).
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> th = pfaff.coordinates("theta")
+        >>> s = pfaff.System([th]); s.add_kinetic_energy(th.diff(pfaff.t)**2 / 2)
+        >>> s.add_generalized_force(th, -th.diff(pfaff.t))
+        >>> s.equations().forcing
+        Matrix([[-Derivative(theta(t), t)]])
+        """
+        if coordinate not in self._index:
+            raise ModelError(f"`{coordinate}` is not a coordinate of this system")
+        label = self._label(name, "genforce")
+        e = as_expr(expr, f"generalized force `{label}`")
+        j = self._index[coordinate]
+        coords = tuple(sorted(set(self._scan((e,), f"generalized force `{label}`", speeds=True)) | {j}))
+        self._add("genforce", (e,), coords, label, coords.index(j))
+
+    def add_holonomic_constraint(self, expr: object, name: str | None = None) -> None:
+        """Add a holonomic constraint f(q, t) = 0; it enters as A = ∂f/∂q, b = ∂f/∂t.
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> x, th = pfaff.coordinates("x theta")
+        >>> s = pfaff.System([x, th]); s.add_holonomic_constraint(x - 2 * th, name="no slip")
+        >>> s.equations().constraint_matrix
+        Matrix([[1, -2]])
+        """
+        label = self._label(name, "constraint")
+        if isinstance(expr, sp.Equality):
+            expr = expr.lhs - expr.rhs
+        e = as_expr(expr, f"constraint `{label}`")
+        coords = self._scan((e,), f"holonomic constraint `{label}`", speeds=False)
+        self._check_new_constraint(e, coords, label)
+        self._add("holonomic", (e,), coords, label)
+
+    def add_velocity_constraint(self, expr: object, name: str | None = None) -> None:
+        """Add a Pfaffian velocity constraint A(q,t) q̇ + b(q,t) = 0 (linear in q̇).
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> x, th = pfaff.coordinates("x theta")
+        >>> s = pfaff.System([x, th])
+        >>> s.add_velocity_constraint(x.diff(pfaff.t) - 2 * th.diff(pfaff.t), name="rolling")
+        >>> s.equations().constraint_matrix
+        Matrix([[1, -2]])
+        """
+        label = self._label(name, "constraint")
+        e = as_expr(expr, f"constraint `{label}`")
+        coords = self._scan((e,), f"velocity constraint `{label}`", speeds=True)
+        local = self._localize((e,), coords)[0]
+        uds = [local_qd(a) for a in range(len(coords))]
+        present = [u for u in uds if local.has(u)]
+        if not present:
+            raise ConstraintError(
+                f"velocity constraint `{label}` contains no velocity; a relation among coordinates "
+                "is holonomic: use add_holonomic_constraint"
+            )
+        nonlinear = [
+            str(self.speeds[coords[uds.index(u)]])
+            for u in present
+            if local.diff(u).has(*uds)
+        ]
+        if nonlinear:
+            raise ConstraintError(
+                f"velocity constraint `{label}` is not Pfaffian: it is not linear in the "
+                f"velocities ({', '.join(nonlinear)}); write it as A(q,t)·q̇ + b(q,t) = 0"
+            )
+        self._check_new_constraint(e, coords, label)
+        self._add("velocity", (e,), coords, label)
+
+    def _check_new_constraint(self, e: sp.Expr, coords: tuple[int, ...], label: str) -> None:
+        if not coords:
+            raise ConstraintError(f"constraint `{label}` names no coordinate: {e} = 0")
+        if len(self.constraints) + 1 > self.n:
+            raise ConstraintError(
+                f"constraint `{label}` would make {len(self.constraints) + 1} constraints on "
+                f"{self.n} coordinates: more independent constraints than coordinates is impossible"
+            )
+        key = self._localize((sp.expand(e),), coords) + (coords,)
+        neg = self._localize((sp.expand(-e),), coords) + (coords,)
+        for k in (key, neg):
+            if k in self._constraint_keys:
+                raise ConstraintError(
+                    f"constraint `{label}` repeats constraint `{self._constraint_keys[k]}`: "
+                    "redundant constraints have no unique multipliers"
+                )
+        self._constraint_keys[key] = label
+
+    # ------------------------------------------------------------------ later stages
+    def equations(self) -> EquationsOfMotion:
+        """Derive Lagrange's equations with multipliers (see :class:`pfaff.EquationsOfMotion`).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> eom = pfaff.models.rolling_ring(3).equations()
+        >>> eom.constraint_matrix.shape
+        (3, 4)
+        """
+        from .derive import derive
+
+        return derive(self)
+
+    def reduce(self, independent: object, *, solutions: dict | None = None) -> EquationsOfMotion:
+        """Equations of motion in minimal coordinates (see :func:`pfaff.reduce.reduce`)."""
+        from .reduce import reduce
+
+        return reduce(self, independent, solutions=solutions)
+
+    def work(self, independent: object = None) -> list[ForceWork]:
+        """Generalized force and virtual power of every applied force (see :func:`pfaff.work.work`)."""
+        from .work import work
+
+        return work(self, independent)
+
+    def __repr__(self) -> str:
+        counts = {k: sum(p.kind == k for p in self.pieces) for k in PIECE_KINDS}
+        parts = ", ".join(f"{v} {k}" for k, v in counts.items() if v)
+        return f"<pfaff.System '{self.name}': {self.n} coordinates{', ' + parts if parts else ''}>"
