@@ -41,19 +41,27 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``pfaff`` command."""
     from . import __version__
 
-    p = argparse.ArgumentParser(prog="pfaff", description="Dynamics of constrained mechanical systems.")
+    p = argparse.ArgumentParser(
+        prog="pfaff", description="Dynamics of constrained mechanical systems."
+    )
     p.add_argument("--version", action="version", version=f"pfaff {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run a built-in demonstration")
     dsub = demo.add_subparsers(dest="demo", required=True)
     ring = dsub.add_parser("ring", help="the seed's rolling ring of N particles")
-    ring.add_argument("--particles", "-N", type=_positive_int, default=6, help="number of particles (default 6)")
-    ring.add_argument("--force", "-F", type=_finite, default=2.0, help="push at the centre (default 2)")
+    ring.add_argument(
+        "--particles", "-N", type=_positive_int, default=6, help="number of particles (default 6)"
+    )
+    ring.add_argument(
+        "--force", "-F", type=_finite, default=2.0, help="push at the centre (default 2)"
+    )
     ring.add_argument("--mass", type=_positive, default=1.0, help="total mass M (default 1)")
     ring.add_argument("--radius", type=_positive, default=0.5, help="radius r (default 0.5)")
     ring.add_argument("--theta-dot", type=_finite, default=0.0, help="spin rate θ̇ (default 0)")
     ring.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    ring.add_argument("--plot", metavar="FILE.png", help="write a figure of the ring and its multipliers")
+    ring.add_argument(
+        "--plot", metavar="FILE.png", help="write a figure of the ring and its multipliers"
+    )
     return p
 
 
@@ -62,7 +70,11 @@ def run_ring(args: argparse.Namespace) -> int:
     from .demo import format_report, ring_report
 
     rep = ring_report(
-        args.particles, force=args.force, mass=args.mass, radius=args.radius, theta_dot=args.theta_dot
+        args.particles,
+        force=args.force,
+        mass=args.mass,
+        radius=args.radius,
+        theta_dot=args.theta_dot,
     )
     if args.plot:
         from .plot import plot_ring

@@ -20,14 +20,18 @@ if TYPE_CHECKING:
 def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
     """Check and order parameter values: every symbol needed, none unknown, all finite reals."""
     if not isinstance(given, dict):
-        raise ParameterError(f"`parameters` must be a dict of symbol (or name) -> value, got {given!r}")
+        raise ParameterError(
+            f"`parameters` must be a dict of symbol (or name) -> value, got {given!r}"
+        )
     by_name = {p.name: p for p in params}
     values: dict[sp.Symbol, object] = {}
     problems = []
     for key, val in given.items():
         sym = by_name.get(key) if isinstance(key, str) else key
         if sym not in params:
-            problems.append(f"unknown parameter `{key}` (the model's are: {', '.join(by_name) or 'none'})")
+            problems.append(
+                f"unknown parameter `{key}` (the model's are: {', '.join(by_name) or 'none'})"
+            )
             continue
         values[sym] = val
     missing = [p.name for p in params if p not in values]
@@ -63,7 +67,9 @@ def dynamics_part(block: Block, params: tuple) -> DynamicsPart:
     """Kernel and scatter indices for a dynamics block."""
     mass, fidx, exprs = dynamics_layout(block)
     kern = _cached(block, "dyn", params, lambda: make_kernel(block, exprs, params))
-    energy = _cached(block, "energy", params, lambda: make_kernel(block, energy_exprs(block), params))
+    energy = _cached(
+        block, "energy", params, lambda: make_kernel(block, energy_exprs(block), params)
+    )
     c = block.coords
     mr = np.array([c[:, a] for a, _ in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
     mc = np.array([c[:, b] for _, b in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
@@ -85,9 +91,11 @@ def build_model(
 ) -> NumericModel:
     """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values."""
     params = tuple(eom.parameters)
-    dyn = [] if constraints_only else [
-        dynamics_part(b, params) for b in eom.blocks if b.local.kind == "dynamics"
-    ]
+    dyn = (
+        []
+        if constraints_only
+        else [dynamics_part(b, params) for b in eom.blocks if b.local.kind == "dynamics"]
+    )
     con = [constraint_part(b, params) for b in eom.blocks if b.local.kind == "constraint"]
     names = {
         "coordinates": [str(q.func) for q in eom.coordinates],

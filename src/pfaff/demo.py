@@ -48,7 +48,9 @@ def pfaffian_pattern(A: sp.MatrixBase, coords: tuple, max_rows: int = 9, max_col
     head = "      " + " ".join(s.rjust(w) for s in names) + (" …" if A.cols > cols else "")
     lines = [head]
     for i, r in enumerate(cells):
-        lines.append(f"  {i + 1:>3} " + " ".join(c.rjust(w) for c in r) + (" …" if A.cols > cols else ""))
+        lines.append(
+            f"  {i + 1:>3} " + " ".join(c.rjust(w) for c in r) + (" …" if A.cols > cols else "")
+        )
     if A.rows > rows:
         lines.append("    ⋮")
     return "\n".join(lines)
@@ -97,7 +99,9 @@ def ring_report(
         "multipliers_back_substitution": lam_bs.tolist(),
         "back_substitution_order": [int(i) + 1 for i in order[:5]],
         "back_substitution_max_difference": float(np.max(np.abs(lam_bs - lam))),
-        "constraint_residual": float(max(np.max(np.abs(f)), np.max(np.abs(g)), np.max(np.abs(acc_res)))),
+        "constraint_residual": float(
+            max(np.max(np.abs(f)), np.max(np.abs(g)), np.max(np.abs(acc_res)))
+        ),
         "constraint_residual_detail": {
             "position": float(np.max(np.abs(f))),
             "velocity": float(np.max(np.abs(g))),
@@ -108,14 +112,18 @@ def ring_report(
     rep["pfaffian_pattern"] = pfaffian_pattern(sym_m[0], eom.coordinates)
     if n <= SHOW_EQUATIONS_MAX:
         rep["equations"] = [f"{vsprint(e.lhs)} = {vsprint(e.rhs)}" for e in eom.lagrange_equations]
-        rep["acceleration_constraints"] = [f"{vsprint(e)} = 0" for e in eom.acceleration_constraints]
+        rep["acceleration_constraints"] = [
+            f"{vsprint(e)} = 0" for e in eom.acceleration_constraints
+        ]
     if n <= EXPLICIT_REDUCE_MAX:
         red = sw.run("reduce", lambda: ring.reduce([ring.coordinates[1]]))
         rep["reduced_from"] = f"explicit {n}-particle model, independent coordinate theta1"
     else:
         mini = models.rolling_ring_minimal(mass=M, radius=r, force=F)
         red = sw.run("reduce", mini.equations)
-        rep["reduced_from"] = "one-coordinate model T = I θ̇² (explicit reduction is done for N <= 64)"
+        rep["reduced_from"] = (
+            "one-coordinate model T = I θ̇² (explicit reduction is done for N <= 64)"
+        )
     eq = red.lagrange_equations[0]
     rep["reduced_equation"] = f"{vsprint(eq.lhs)} = {vsprint(eq.rhs)}"
     rep["reduced_equation_latex"] = sp.latex(eq).replace(r"\frac{d^{2}}{d t^{2}}", r"\ddot")
@@ -159,7 +167,9 @@ def format_report(rep: dict) -> str:
     ]
     show = list(range(min(n, 4))) + ([n - 1] if n > 4 else [])
     for i in show:
-        out.append(f"  λ_{i + 1:<4} = {lam[i]: .10f}   back-substituted {rep['multipliers_back_substitution'][i]: .10f}")
+        out.append(
+            f"  λ_{i + 1:<4} = {lam[i]: .10f}   back-substituted {rep['multipliers_back_substitution'][i]: .10f}"
+        )
     out += [
         f"  max |λ_KKT - λ_back-substitution| = {rep['back_substitution_max_difference']:.2e}",
         "",

@@ -101,7 +101,9 @@ def _particle(key: tuple, k: int) -> Local:
     m, r = key[2], key[3:]
     q, qd = _qs(k)
     J = [[rc.diff(q[a]) for a in range(k)] for rc in r]
-    v = [sp.Add(*(Jc[a] * qd[a] for a in range(k)), rc.diff(t)) for Jc, rc in zip(J, r, strict=True)]
+    v = [
+        sp.Add(*(Jc[a] * qd[a] for a in range(k)), rc.diff(t)) for Jc, rc in zip(J, r, strict=True)
+    ]
     acc = [dt_bias(vc, k) for vc in v]
     loc = Local("dynamics", k, kinetic=m * sp.Add(*(vc**2 for vc in v)) / 2)
     for a in range(k):
@@ -186,7 +188,11 @@ def group(system: System) -> list[Block]:
     for key, members in groups.items():
         local = derive_template(key, len(members[0][0].coords))
         coords = np.array([p.coords for p, _ in members], dtype=np.int64).reshape(len(members), -1)
-        rows = np.array([r for _, r in members], dtype=np.int64) if local.kind == "constraint" else None
+        rows = (
+            np.array([r for _, r in members], dtype=np.int64)
+            if local.kind == "constraint"
+            else None
+        )
         blocks.append(Block(local, coords, rows, [p for p, _ in members]))
     return blocks
 

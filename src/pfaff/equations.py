@@ -173,7 +173,9 @@ class EquationsOfMotion:
     @cached_property
     def velocity_terms(self) -> sp.MatrixBase:
         """h, shape (n, 1): velocity products, explicit time dependence and ∂V/∂q."""
-        return sp.ImmutableMatrix(self._assembled["h"]) if self.n else sp.ImmutableMatrix.zeros(0, 1)
+        return (
+            sp.ImmutableMatrix(self._assembled["h"]) if self.n else sp.ImmutableMatrix.zeros(0, 1)
+        )
 
     @cached_property
     def generalized_forces(self) -> sp.MatrixBase:
@@ -291,7 +293,9 @@ class EquationsOfMotion:
         K[:n, :n] = M
         K[:n, n:] = -A.T
         K[n:, :n] = A
-        rhs = sp.Matrix.vstack(sp.Matrix(self.forcing), -sp.Matrix(self._assembled["bias"]) if m else sp.zeros(0, 1))
+        rhs = sp.Matrix.vstack(
+            sp.Matrix(self.forcing), -sp.Matrix(self._assembled["bias"]) if m else sp.zeros(0, 1)
+        )
         try:
             sol = K.LUsolve(rhs)
         except (ValueError, ZeroDivisionError) as e:

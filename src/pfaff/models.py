@@ -104,7 +104,11 @@ def ring_state(
 
 
 def rolling_ring_minimal(
-    *, mass: object = None, radius: object = None, force: object = None, incline: object = None,
+    *,
+    mass: object = None,
+    radius: object = None,
+    force: object = None,
+    incline: object = None,
     gravity: object = None,
 ) -> System:
     """The ring in one coordinate θ: T = ½Mẋ² + ½Iθ̇² with ẋ = rθ̇ and I = Mr², i.e. T = Iθ̇².
@@ -130,7 +134,9 @@ def rolling_ring_minimal(
     return s
 
 
-def cartesian_pendulum(*, mass: object = None, length: object = None, gravity: object = None) -> System:
+def cartesian_pendulum(
+    *, mass: object = None, length: object = None, gravity: object = None
+) -> System:
     """Point mass on a rod in Cartesian coordinates: q = (x, y), V = m g y, x² + y² - L² = 0.
 
     The multiplier is λ = m(g y - ẋ² - ẏ²)/(2L²); the rod tension (pull towards the pivot) is

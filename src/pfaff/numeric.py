@@ -149,7 +149,9 @@ class NumericModel:
         return avals, b, bias, f
 
     # ------------------------------------------------------------------ public evaluation
-    def mass_matrix(self, t: float, q: object, qd: object | None = None) -> np.ndarray | sps.csr_matrix:
+    def mass_matrix(
+        self, t: float, q: object, qd: object | None = None
+    ) -> np.ndarray | sps.csr_matrix:
         """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix."""
         t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
         M = sps.coo_matrix((self._dynamics(t, q, qd)[0], (self._mr, self._mc)), shape=(self.n,) * 2)
@@ -162,7 +164,9 @@ class NumericModel:
     def constraint_matrix(self, t: float, q: object) -> np.ndarray | sps.csr_matrix:
         """A(q, t), shape (m, n): dense when small, else CSR."""
         t, q, qd = self._state(t, q, np.zeros(self.n))
-        A = sps.coo_matrix((self._constraints(t, q, qd)[0], (self._ar, self._ac)), shape=(self.m, self.n))
+        A = sps.coo_matrix(
+            (self._constraints(t, q, qd)[0], (self._ar, self._ac)), shape=(self.m, self.n)
+        )
         return A.toarray() if self.dense else A.tocsr()
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +197,9 @@ class NumericModel:
             K = np.bincount(self._kkt_lin, weights=data, minlength=N * N).reshape(N, N).T
         else:
             vals = np.bincount(self._kkt_slot, weights=data, minlength=len(self._kkt_uniq))
-            K = sps.csc_matrix((vals, self._kkt_uniq % N, _indptr(self._kkt_uniq // N, N)), shape=(N, N))
+            K = sps.csc_matrix(
+                (vals, self._kkt_uniq % N, _indptr(self._kkt_uniq // N, N)), shape=(N, N)
+            )
         return K, rhs
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
@@ -204,8 +210,8 @@ class NumericModel:
         >>> import numpy as np, pfaff
         >>> sys = pfaff.models.rolling_ring(8, force=True)
         >>> model = sys.equations().compile({"M": 1, "r": 0.5, "F": 2})
-        >>> q = pfaff.models.ring_configuration(8, theta=0.3, radius=0.5)
-        >>> qdd, lam = model.accelerations(0.0, q, np.zeros(9))
+        >>> q, qd = pfaff.models.ring_state(8, radius=0.5, theta=0.3)
+        >>> qdd, lam = model.accelerations(0.0, q, qd)
         >>> round(float(qdd[1]), 12), round(float(lam[0]), 12)
         (2.0, -1.0)
         """

@@ -34,20 +34,46 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     ax.fill_between([x - 2 * r, x + 2 * r], -r - 0.12 * r, -r, color="0.9", zorder=0)
     shown = np.linspace(0, n - 1, min(n, 64)).astype(int)
     px, py = x + r * np.sin(th[shown]), r * np.cos(th[shown])
-    ax.scatter(px, py, s=max(8, 600 / max(len(shown), 1)), c="tab:blue", zorder=3, label="particles")
+    ax.scatter(
+        px, py, s=max(8, 600 / max(len(shown), 1)), c="tab:blue", zorder=3, label="particles"
+    )
     ax.scatter(px[:1], py[:1], s=60, c="tab:red", zorder=4, label="particle 1 (contact)")
     scale = 0.6 * r / max(abs(F), 1e-12)
     tang = gcf[1:][shown] / r
     et = np.stack([np.cos(th[shown]), -np.sin(th[shown])])
-    ax.quiver(px, py, et[0] * tang * scale, et[1] * tang * scale, angles="xy", scale_units="xy",
-              scale=1, color="tab:green", width=0.004, label="tangential constraint force")
-    ax.annotate("", xy=(x + F * scale, 0), xytext=(x, 0),
-                arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 2})
+    ax.quiver(
+        px,
+        py,
+        et[0] * tang * scale,
+        et[1] * tang * scale,
+        angles="xy",
+        scale_units="xy",
+        scale=1,
+        color="tab:green",
+        width=0.004,
+        label="tangential constraint force",
+    )
+    ax.annotate(
+        "",
+        xy=(x + F * scale, 0),
+        xytext=(x, 0),
+        arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 2},
+    )
     ax.text(x + F * scale / 2, 0.06 * r, f"F = {F:g}", ha="center")
-    ax.annotate("", xy=(x + lam[0] * scale, -r), xytext=(x, -r),
-                arrowprops={"arrowstyle": "-|>", "color": "tab:red", "lw": 2})
-    ax.text(x + lam[0] * scale / 2, -r - 0.1 * r, f"friction λ₁ = {lam[0]:.4g}", ha="center", va="top",
-            color="tab:red")
+    ax.annotate(
+        "",
+        xy=(x + lam[0] * scale, -r),
+        xytext=(x, -r),
+        arrowprops={"arrowstyle": "-|>", "color": "tab:red", "lw": 2},
+    )
+    ax.text(
+        x + lam[0] * scale / 2,
+        -r - 0.1 * r,
+        f"friction λ₁ = {lam[0]:.4g}",
+        ha="center",
+        va="top",
+        color="tab:red",
+    )
     ax.set_aspect("equal")
     ax.set_xlim(x - 1.6 * r, x + 1.6 * r)
     ax.set_ylim(-1.35 * r, 1.3 * r)
@@ -56,9 +82,17 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     ax.set_xlabel("x")
     # --- multipliers
     k = np.arange(1, n + 1)
-    bx.plot(k[1:], lam[1:], ".-", ms=3 if n > 64 else 6, color="tab:blue",
-            label="spacing multipliers λ_k (k ≥ 2)")
-    bx.plot([1], [lam[0]], "o", color="tab:red", label=f"no-slip multiplier λ₁ = {lam[0]:.4g} (= -F/2)")
+    bx.plot(
+        k[1:],
+        lam[1:],
+        ".-",
+        ms=3 if n > 64 else 6,
+        color="tab:blue",
+        label="spacing multipliers λ_k (k ≥ 2)",
+    )
+    bx.plot(
+        [1], [lam[0]], "o", color="tab:red", label=f"no-slip multiplier λ₁ = {lam[0]:.4g} (= -F/2)"
+    )
     bx.axhline(0, color="0.6", lw=0.8)
     bx.set_xlabel("constraint k")
     bx.set_ylabel("λ_k")

@@ -29,9 +29,13 @@ def check_constraint_rank(eom: EquationsOfMotion, seed: int = 20261122) -> None:
     if m == 0:
         return
     if m > n:
-        raise ConstraintError(f"{m} constraints on {n} coordinates: more constraints than coordinates")
+        raise ConstraintError(
+            f"{m} constraints on {n} coordinates: more constraints than coordinates"
+        )
     rng = np.random.default_rng(seed)
-    model = build_model(eom, list(rng.uniform(0.7, 1.6, len(eom.parameters))), constraints_only=True)
+    model = build_model(
+        eom, list(rng.uniform(0.7, 1.6, len(eom.parameters))), constraints_only=True
+    )
     q = rng.uniform(-1.3, 1.3, n)
     with np.errstate(all="ignore"):
         A = model.constraint_matrix(rng.uniform(0.1, 1.0), q)

@@ -124,7 +124,9 @@ def _solve_positions(
     return phi
 
 
-def reduce(system: System, independent: object, *, solutions: dict | None = None) -> EquationsOfMotion:
+def reduce(
+    system: System, independent: object, *, solutions: dict | None = None
+) -> EquationsOfMotion:
     """Equations of motion of ``system`` in the independent coordinates ``independent``.
 
     Parameters
@@ -197,7 +199,9 @@ def reduce(system: System, independent: object, *, solutions: dict | None = None
     for (j, c), e in Msub.items():
         inertia_bias[j].append(e * nu[c])
     for a in range(k):
-        hred[a] = tidy(sp.Add(*(nmat[j][a] * (hq[j] + sp.Add(*inertia_bias[j])) for j in range(len(coords)))))
+        hred[a] = tidy(
+            sp.Add(*(nmat[j][a] * (hq[j] + sp.Add(*inertia_bias[j])) for j in range(len(coords))))
+        )
         Qred[a] = tidy(sp.Add(*(nmat[j][a] * Qq[j] for j in range(len(coords)))))
         for b in range(k):
             Mred[a, b] = tidy(sp.Add(*(nmat[j][a] * e * nmat[c][b] for (j, c), e in Msub.items())))

@@ -126,7 +126,9 @@ class System:
                 elif is_coordinate_like(d.expr) and d.expr in self._index:
                     problems.append(f"contains the higher derivative {d}, which is not allowed")
                 else:
-                    problems.append(f"contains the derivative {d} of something that is not a coordinate")
+                    problems.append(
+                        f"contains the derivative {d} of something that is not a coordinate"
+                    )
             for f in e.atoms(AppliedUndef):
                 if f in self._index:
                     used.add(self._index[f])
@@ -149,7 +151,9 @@ class System:
             rule[self.coordinates[i]] = local_q(a)
         return tuple(e.xreplace(rule) for e in exprs)
 
-    def _add(self, kind: str, exprs: tuple, coords: tuple[int, ...], name: str, dim: int = 0) -> Piece:
+    def _add(
+        self, kind: str, exprs: tuple, coords: tuple[int, ...], name: str, dim: int = 0
+    ) -> Piece:
         local = self._localize(exprs, coords)
         piece = Piece(kind, exprs, coords, (kind, dim, *local), name, dim)
         self.pieces.append(piece)
@@ -176,7 +180,9 @@ class System:
                 f"sympy.physics.vector.Vector, got {type(value).__name__}"
             )
         if len(comps) not in (2, 3):
-            raise ModelError(f"{what} must have 2 or 3 components (planar or spatial), got {len(comps)}")
+            raise ModelError(
+                f"{what} must have 2 or 3 components (planar or spatial), got {len(comps)}"
+            )
         return tuple(as_expr(c, f"{what} component {i}") for i, c in enumerate(comps))
 
     def _label(self, name: str | None, kind: str) -> str:
@@ -281,15 +287,15 @@ class System:
         f = self._vector(force, f"force `{label}`", frame)
         r = self._vector(at, f"point of force `{label}`", frame)
         if len(f) != len(r):
-            raise ModelError(
-                f"force `{label}` has {len(f)} components but its point has {len(r)}"
-            )
+            raise ModelError(f"force `{label}` has {len(f)} components but its point has {len(r)}")
         cf = self._scan(f, f"force `{label}`", speeds=True)
         cr = self._scan(r, f"point of force `{label}`", speeds=False)
         coords = tuple(sorted(set(cf) | set(cr)))
         self._add("force", (*f, *r), coords, label, len(f))
 
-    def add_generalized_force(self, coordinate: object, expr: object, *, name: str | None = None) -> None:
+    def add_generalized_force(
+        self, coordinate: object, expr: object, *, name: str | None = None
+    ) -> None:
         """Add ``expr`` to the generalized force Q of ``coordinate`` (a torque for an angle).
 
         Examples
@@ -306,7 +312,9 @@ class System:
         label = self._label(name, "genforce")
         e = as_expr(expr, f"generalized force `{label}`")
         j = self._index[coordinate]
-        coords = tuple(sorted(set(self._scan((e,), f"generalized force `{label}`", speeds=True)) | {j}))
+        coords = tuple(
+            sorted(set(self._scan((e,), f"generalized force `{label}`", speeds=True)) | {j})
+        )
         self._add("genforce", (e,), coords, label, coords.index(j))
 
     def add_holonomic_constraint(self, expr: object, name: str | None = None) -> None:
@@ -352,9 +360,7 @@ class System:
                 "is holonomic: use add_holonomic_constraint"
             )
         nonlinear = [
-            str(self.speeds[coords[uds.index(u)]])
-            for u in present
-            if local.diff(u).has(*uds)
+            str(self.speeds[coords[uds.index(u)]]) for u in present if local.diff(u).has(*uds)
         ]
         if nonlinear:
             raise ConstraintError(
@@ -372,8 +378,8 @@ class System:
                 f"constraint `{label}` would make {len(self.constraints) + 1} constraints on "
                 f"{self.n} coordinates: more independent constraints than coordinates is impossible"
             )
-        key = self._localize((sp.expand(e),), coords) + (coords,)
-        neg = self._localize((sp.expand(-e),), coords) + (coords,)
+        key = (*self._localize((sp.expand(e),), coords), coords)
+        neg = (*self._localize((sp.expand(-e),), coords), coords)
         for k in (key, neg):
             if k in self._constraint_keys:
                 raise ConstraintError(

@@ -101,7 +101,14 @@ def _null_space(A: sp.Matrix, coords: tuple, independent: list | None) -> tuple[
     if independent is None:
         basis = A.nullspace(simplify=True)
         N = sp.Matrix.hstack(*basis) if basis else sp.zeros(n, 0)
-        free = [next(i for i in range(n) if N[i, a] == 1 and all(N[i, c] == 0 for c in range(N.cols) if c != a)) for a in range(N.cols)]
+        free = [
+            next(
+                i
+                for i in range(n)
+                if N[i, a] == 1 and all(N[i, c] == 0 for c in range(N.cols) if c != a)
+            )
+            for a in range(N.cols)
+        ]
         return N, tuple(coords[i].diff(t) for i in free)
     ind = [coords.index(q) for q in independent]
     dep = [i for i in range(n) if i not in ind]
