@@ -103,7 +103,10 @@ def test_repeated_constraint_rejected_at_once() -> None:
     s = pfaff.System([x, y])
     s.add_holonomic_constraint(x - y, name="a")
     with pytest.raises(ConstraintError, match="repeats constraint `a`"):
-        s.add_holonomic_constraint(y - x)
+        s.add_holonomic_constraint(x - y)
+    s.add_holonomic_constraint(y - x, name="b")  # the negation: caught by the rank test
+    with pytest.raises(ConstraintError, match=r"redundant or inconsistent.*`b`"):
+        s.equations()
 
 
 def test_ring_closure_is_redundant() -> None:

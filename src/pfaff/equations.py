@@ -10,7 +10,7 @@ import sympy as sp
 from sympy.physics.vector.printing import vlatex
 
 from .derive import Block, Local
-from .symbols import local_q, local_qd, t
+from .symbols import accel, local_q, local_qd, speed
 
 if TYPE_CHECKING:
     from .numeric import NumericModel
@@ -92,8 +92,8 @@ class EquationsOfMotion:
             holonomic = [p.kind == "holonomic" for p in cons]
             parameters = system.parameters
         self.coordinates: tuple = tuple(coordinates or ())
-        self.speeds = tuple(q.diff(t) for q in self.coordinates)
-        self.accels = tuple(q.diff(t, 2) for q in self.coordinates)
+        self.speeds = tuple(speed(q) for q in self.coordinates)
+        self.accels = tuple(accel(q) for q in self.coordinates)
         self.constraint_names: list[str] = list(constraint_names or [])
         self.holonomic: list[bool] = list(holonomic or [])
         self.parameters: tuple = tuple(parameters or ())
@@ -113,49 +113,65 @@ class EquationsOfMotion:
         return len(self.multipliers)
 
     # ------------------------------------------------------------------ assembly
-    @cached_property
-    def _assembled(self) -> dict:
-        n, m = self.n, self.m
-        mass: dict[tuple[int, int], list] = {}
-        h: list[list] = [[] for _ in range(n)]
-        Q: list[list] = [[] for _ in range(n)]
-        A: dict[tuple[int, int], sp.Expr] = {}
-        b, bias, f = [sp.S.Zero] * m, [sp.S.Zero] * m, [None] * m
-        T, V = [], []
+    def _instances(self, kind: str):
+        """Yield (block, instance index, coordinate indices, local -> global rule) per instance."""
         for block in self.blocks:
-            loc = block.local
-            for i, idx in enumerate(block.coords):
+            if block.local.kind != kind:
+                continue
+            for i, idx in enumerate(block.coords.tolist()):
                 rule = {}
                 for a, c in enumerate(idx):
                     rule[local_q(a)] = self.coordinates[c]
                     rule[local_qd(a)] = self.speeds[c]
-                if loc.kind == "constraint":
-                    r = int(block.rows[i])
-                    for a, e in loc.A.items():
-                        A[r, int(idx[a])] = e.xreplace(rule)
-                    b[r], bias[r] = loc.b.xreplace(rule), loc.bias.xreplace(rule)
-                    f[r] = None if loc.f is None else loc.f.xreplace(rule)
-                    continue
-                for (a, c), e in loc.mass.items():
-                    mass.setdefault((int(idx[a]), int(idx[c])), []).append(e.xreplace(rule))
-                for a, e in loc.h.items():
-                    h[idx[a]].append(e.xreplace(rule))
-                for a, e in loc.Q.items():
-                    Q[idx[a]].append(e.xreplace(rule))
-                T.append(loc.kinetic.xreplace(rule))
-                V.append(loc.potential.xreplace(rule))
-        mass_sum = {k: s for k, v in mass.items() if (s := sp.Add(*v)) != 0}
-        return {
-            "M": mass_sum,
-            "h": [sp.Add(*v) for v in h],
-            "Q": [sp.Add(*v) for v in Q],
-            "A": A,
-            "b": b,
-            "bias": bias,
-            "f": f,
-            "T": sp.Add(*T),
-            "V": sp.Add(*V),
-        }
+                yield block, i, idx, rule
+
+    @cached_property
+    def _mass_entries(self) -> dict[tuple[int, int], sp.Expr]:
+        mass: dict[tuple[int, int], list] = {}
+        for block, _, idx, rule in self._instances("dynamics"):
+            for (a, c), e in block.local.mass.items():
+                if a <= c:
+                    ge = e.xreplace(rule)
+                    mass.setdefault((idx[a], idx[c]), []).append(ge)
+                    if a != c:
+                        mass.setdefault((idx[c], idx[a]), []).append(ge)
+        return {k: s for k, v in mass.items() if (s := sp.Add(*v)) != 0}
+
+    def _vector_terms(self, attr: str) -> list[sp.Expr]:
+        out: list[list] = [[] for _ in range(self.n)]
+        for block, _, idx, rule in self._instances("dynamics"):
+            for a, e in getattr(block.local, attr).items():
+                out[idx[a]].append(e.xreplace(rule))
+        return [sp.Add(*v) for v in out]
+
+    @cached_property
+    def _constraint_entries(self) -> dict:
+        m = self.m
+        A: dict[tuple[int, int], sp.Expr] = {}
+        b, bias, f = [sp.S.Zero] * m, [sp.S.Zero] * m, [None] * m
+        for block, i, idx, rule in self._instances("constraint"):
+            loc, r = block.local, int(block.rows[i])
+            for a, e in loc.A.items():
+                A[r, idx[a]] = e.xreplace(rule)
+            b[r], bias[r] = loc.b.xreplace(rule), loc.bias.xreplace(rule)
+            f[r] = None if loc.f is None else loc.f.xreplace(rule)
+        return {"A": A, "b": b, "bias": bias, "f": f}
+
+    def _energy(self, attr: str) -> sp.Expr:
+        return sp.Add(
+            *(
+                getattr(blk.local, attr).xreplace(rule)
+                for blk, _, _, rule in self._instances("dynamics")
+            )
+        )
+
+    @cached_property
+    def _h_list(self) -> list[sp.Expr]:
+        return self._vector_terms("h")
+
+    @cached_property
+    def _Q_list(self) -> list[sp.Expr]:
+        return self._vector_terms("Q")
 
     def _matrix(self, rows: int, cols: int, entries: dict) -> sp.MatrixBase:
         if max(rows, cols) > DENSE_SYMBOLIC_LIMIT:
@@ -168,73 +184,71 @@ class EquationsOfMotion:
     @cached_property
     def mass_matrix(self) -> sp.MatrixBase:
         """M, shape (n, n)."""
-        return self._matrix(self.n, self.n, self._assembled["M"])
+        return self._matrix(self.n, self.n, self._mass_entries)
 
     @cached_property
     def velocity_terms(self) -> sp.MatrixBase:
         """h, shape (n, 1): velocity products, explicit time dependence and ∂V/∂q."""
-        return (
-            sp.ImmutableMatrix(self._assembled["h"]) if self.n else sp.ImmutableMatrix.zeros(0, 1)
-        )
+        return sp.ImmutableMatrix(self._h_list)
 
     @cached_property
     def generalized_forces(self) -> sp.MatrixBase:
         """Q, shape (n, 1): generalized applied forces by virtual work."""
-        return sp.ImmutableMatrix(self._assembled["Q"])
+        return sp.ImmutableMatrix(self._Q_list)
 
     @cached_property
     def forcing(self) -> sp.MatrixBase:
         """Q - h, shape (n, 1)."""
-        return sp.ImmutableMatrix(
-            [q - h for q, h in zip(self._assembled["Q"], self._assembled["h"], strict=True)]
-        )
+        return sp.ImmutableMatrix([q - h for q, h in zip(self._Q_list, self._h_list, strict=True)])
 
     @cached_property
     def constraint_matrix(self) -> sp.MatrixBase:
         """A, shape (m, n)."""
-        return self._matrix(self.m, self.n, self._assembled["A"])
+        return self._matrix(self.m, self.n, self._constraint_entries["A"])
 
     @cached_property
     def constraint_bias(self) -> sp.MatrixBase:
         """b, shape (m, 1), with A q̇ + b = 0."""
-        return sp.ImmutableMatrix(self.m, 1, self._assembled["b"])
+        return sp.ImmutableMatrix(self.m, 1, self._constraint_entries["b"])
 
     @cached_property
     def acceleration_constraints(self) -> sp.MatrixBase:
         """A q̈ + Ȧ q̇ + ḃ, shape (m, 1); each entry vanishes on a motion."""
         rows = [[] for _ in range(self.m)]
-        for (i, j), e in self._assembled["A"].items():
+        for (i, j), e in self._constraint_entries["A"].items():
             rows[i].append(e * self.accels[j])
         return sp.ImmutableMatrix(
-            self.m, 1, [sp.Add(*r, c) for r, c in zip(rows, self._assembled["bias"], strict=True)]
+            self.m,
+            1,
+            [sp.Add(*r, c) for r, c in zip(rows, self._constraint_entries["bias"], strict=True)],
         )
 
     @cached_property
     def holonomic_constraints(self) -> list[sp.Expr | None]:
         """f(q, t) of each holonomic constraint (None for a velocity constraint)."""
-        return list(self._assembled["f"])
+        return list(self._constraint_entries["f"])
 
     @cached_property
     def kinetic_energy(self) -> sp.Expr:
         """T(q, q̇, t)."""
-        return self._assembled["T"]
+        return self._energy("kinetic")
 
     @cached_property
     def potential_energy(self) -> sp.Expr:
         """V(q, t)."""
-        return self._assembled["V"]
+        return self._energy("potential")
 
     @cached_property
     def lagrange_equations(self) -> list[sp.Equality]:
         """One ``Eq(M q̈ + h, Q + Aᵀλ)`` per coordinate."""
         lhs: list[list] = [[] for _ in range(self.n)]
-        rhs: list[list] = [[q] for q in self._assembled["Q"]]
-        for (i, j), e in self._assembled["M"].items():
+        rhs: list[list] = [[q] for q in self._Q_list]
+        for (i, j), e in self._mass_entries.items():
             lhs[i].append(e * self.accels[j])
-        for (i, j), e in self._assembled["A"].items():
+        for (i, j), e in self._constraint_entries["A"].items():
             rhs[j].append(e * self.multipliers[i])
         return [
-            sp.Eq(sp.Add(*lhs[j], self._assembled["h"][j]), sp.Add(*rhs[j]), evaluate=False)
+            sp.Eq(sp.Add(*lhs[j], self._h_list[j]), sp.Add(*rhs[j]), evaluate=False)
             for j in range(self.n)
         ]
 
@@ -294,7 +308,8 @@ class EquationsOfMotion:
         K[:n, n:] = -A.T
         K[n:, :n] = A
         rhs = sp.Matrix.vstack(
-            sp.Matrix(self.forcing), -sp.Matrix(self._assembled["bias"]) if m else sp.zeros(0, 1)
+            sp.Matrix(self.forcing),
+            -sp.Matrix(self._constraint_entries["bias"]) if m else sp.zeros(0, 1),
         )
         try:
             sol = K.LUsolve(rhs)
@@ -339,7 +354,7 @@ class EquationsOfMotion:
         n = len(coordinates)
         rule = {}
         for a, q in enumerate(coordinates):
-            rule[q.diff(t)] = local_qd(a)
+            rule[speed(q)] = local_qd(a)
             rule[q] = local_q(a)
         loc = Local("dynamics", n)
         for i in range(n):

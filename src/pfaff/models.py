@@ -65,8 +65,11 @@ def rolling_ring(
     ring = System(qs, name=f"rolling ring, N={n}")
     m = M / n
     dth = 2 * sp.pi / n
+    # sin/cos of a bare coordinate never simplify: skip SymPy's evaluation (the costliest part).
+    sin = [sp.sin(q, evaluate=False) for q in th]
+    cos = [sp.cos(q, evaluate=False) for q in th]
     for k in range(n):
-        ring.add_particle(m, [x + r * sp.sin(th[k]), r * sp.cos(th[k])], name=f"particle {k + 1}")
+        ring.add_particle(m, [x + r * sin[k], r * cos[k]], name=f"particle {k + 1}")
     ring.add_holonomic_constraint(x - r * th[0], name="no slip")
     for k in range(n - 1):
         ring.add_holonomic_constraint(th[k + 1] - th[k] - dth, name=f"spacing {k + 1}")
@@ -75,7 +78,7 @@ def rolling_ring(
     if incline is not None and incline is not False:
         a, g = _param(incline, "alpha"), _param(gravity, "g")
         for k in range(n):
-            s_, h_ = x + r * sp.sin(th[k]), r * sp.cos(th[k])
+            s_, h_ = x + r * sin[k], r * cos[k]
             ring.add_potential_energy(
                 -m * g * (s_ * sp.sin(a) - h_ * sp.cos(a)), name=f"gravity {k + 1}"
             )

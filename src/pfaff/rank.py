@@ -18,7 +18,7 @@ from .errors import ConstraintError
 if TYPE_CHECKING:
     from .equations import EquationsOfMotion
 
-DENSE_RANK_LIMIT = 1500
+DENSE_RANK_LIMIT = 200
 
 
 def check_constraint_rank(eom: EquationsOfMotion, seed: int = 20261122) -> None:

@@ -188,13 +188,13 @@ def reduce(
         a = vel[q.diff(t)].diff(t).xreplace(accel_rule)
         nu.append(a.xreplace({d.diff(t): vel[d.diff(t)] for d in unsolved}))
     k = len(ind)
-    Mfull = eom._assembled["M"]
+    Mfull = eom._mass_entries
     Msub = {jk: e.xreplace(subs) for jk, e in Mfull.items()}
     Mred = sp.zeros(k, k)
     hred = sp.zeros(k, 1)
     Qred = sp.zeros(k, 1)
-    hq = [e.xreplace(subs) for e in eom._assembled["h"]]
-    Qq = [e.xreplace(subs) for e in eom._assembled["Q"]]
+    hq = [e.xreplace(subs) for e in eom._h_list]
+    Qq = [e.xreplace(subs) for e in eom._Q_list]
     inertia_bias = [[] for _ in coords]
     for (j, c), e in Msub.items():
         inertia_bias[j].append(e * nu[c])

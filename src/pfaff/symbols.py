@@ -113,3 +113,15 @@ def as_expr(value: object, what: str) -> sp.Expr:
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ModelError(f"{what} contains NaN or infinity: {expr}")
     return expr
+
+
+@cache
+def speed(q: sp.Function) -> sp.Derivative:
+    """q̇ as ``Derivative(q, t)`` (built directly: ``q.diff(t)`` is 20x slower)."""
+    return sp.Derivative(q, t)
+
+
+@cache
+def accel(q: sp.Function) -> sp.Derivative:
+    """q̈ as ``Derivative(q, (t, 2))``."""
+    return sp.Derivative(q, (t, 2))

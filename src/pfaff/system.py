@@ -17,7 +17,7 @@ from sympy.core.function import AppliedUndef
 from sympy.physics.vector import Vector
 
 from .errors import ConstraintError, ModelError, ModelTypeError
-from .symbols import as_expr, is_coordinate_like, local_q, local_qd, t, validate_coordinates
+from .symbols import as_expr, is_coordinate_like, local_q, local_qd, speed, t, validate_coordinates
 
 if TYPE_CHECKING:
     from .equations import EquationsOfMotion
@@ -86,13 +86,14 @@ class System:
 
     def __init__(self, coordinates: object, *, name: str = "system") -> None:
         self.coordinates: tuple[sp.Function, ...] = validate_coordinates(coordinates)
-        self.speeds: tuple[sp.Expr, ...] = tuple(q.diff(t) for q in self.coordinates)
+        self.speeds: tuple[sp.Expr, ...] = tuple(speed(q) for q in self.coordinates)
         self.name = name
         self._index = {q: i for i, q in enumerate(self.coordinates)}
         self._speed_index = {qd: i for i, qd in enumerate(self.speeds)}
         self.pieces: list[Piece] = []
         self._parameters: set[sp.Symbol] = set()
         self._constraint_keys: dict[tuple, str] = {}
+        self._counts: dict[str, int] = dict.fromkeys(PIECE_KINDS, 0)
 
     # ------------------------------------------------------------------ inspection helpers
     @property
@@ -109,6 +110,11 @@ class System:
     def constraints(self) -> list[Piece]:
         """Holonomic and velocity constraints in the order they were added (one multiplier each)."""
         return [p for p in self.pieces if p.kind in ("holonomic", "velocity")]
+
+    @property
+    def n_constraints(self) -> int:
+        """Number of constraints m."""
+        return self._counts["holonomic"] + self._counts["velocity"]
 
     def _scan(self, exprs: tuple[sp.Expr, ...], what: str, *, speeds: bool) -> tuple[int, ...]:
         """Indices of the coordinates the expressions involve; reject foreign functions of time."""
@@ -157,6 +163,7 @@ class System:
         local = self._localize(exprs, coords)
         piece = Piece(kind, exprs, coords, (kind, dim, *local), name, dim)
         self.pieces.append(piece)
+        self._counts[kind] += 1
         return piece
 
     def _vector(self, value: object, what: str, frame: object) -> tuple[sp.Expr, ...]:
@@ -188,7 +195,7 @@ class System:
     def _label(self, name: str | None, kind: str) -> str:
         if name is not None and not isinstance(name, str):
             raise ModelTypeError(f"`name` must be a string, got {name!r}")
-        return name or f"{kind}{sum(p.kind == kind for p in self.pieces) + 1}"
+        return name or f"{kind}{self._counts.get(kind, self.n_constraints) + 1}"
 
     # ------------------------------------------------------------------ building the model
     def add_particle(
@@ -373,19 +380,17 @@ class System:
     def _check_new_constraint(self, e: sp.Expr, coords: tuple[int, ...], label: str) -> None:
         if not coords:
             raise ConstraintError(f"constraint `{label}` names no coordinate: {e} = 0")
-        if len(self.constraints) + 1 > self.n:
+        if self.n_constraints + 1 > self.n:
             raise ConstraintError(
-                f"constraint `{label}` would make {len(self.constraints) + 1} constraints on "
+                f"constraint `{label}` would make {self.n_constraints + 1} constraints on "
                 f"{self.n} coordinates: more independent constraints than coordinates is impossible"
             )
-        key = (*self._localize((sp.expand(e),), coords), coords)
-        neg = (*self._localize((sp.expand(-e),), coords), coords)
-        for k in (key, neg):
-            if k in self._constraint_keys:
-                raise ConstraintError(
-                    f"constraint `{label}` repeats constraint `{self._constraint_keys[k]}`: "
-                    "redundant constraints have no unique multipliers"
-                )
+        key = (*self._localize((e,), coords), coords)
+        if key in self._constraint_keys:
+            raise ConstraintError(
+                f"constraint `{label}` repeats constraint `{self._constraint_keys[key]}`: "
+                "redundant constraints have no unique multipliers"
+            )
         self._constraint_keys[key] = label
 
     # ------------------------------------------------------------------ later stages
