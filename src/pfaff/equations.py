@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from .numeric import NumericModel
     from .system import System
 
-DENSE_SYMBOLIC_LIMIT = 500  # above this many coordinates, matrices are ImmutableSparseMatrix
+DENSE_SYMBOLIC_LIMIT = 500  # above this many coordinates, M and A are sparse
 SOLVE_LIMIT = 40  # largest n + m for the symbolic solve
 
 
@@ -31,6 +31,28 @@ class Solution(dict):
     multipliers: sp.Matrix
 
 
+def _placeholder_calls(loc: Local) -> list[sp.Expr]:
+    """Function calls f(_q_a, ...) whose arguments are all bare local coordinates."""
+    cached = loc.__dict__.get("_calls")
+    if cached is None:
+        exprs = [*loc.mass.values(), *loc.h.values(), *loc.Q.values(), *loc.A.values()]
+        exprs += [loc.b, loc.bias, loc.kinetic, loc.potential] + (
+            [loc.f] if loc.f is not None else []
+        )
+        placeholders = {local_q(a) for a in range(loc.k)}
+        cached = sorted(
+            {
+                f
+                for e in exprs
+                for f in e.atoms(sp.Function)
+                if f.args and all(a in placeholders for a in f.args)
+            },
+            key=sp.default_sort_key,
+        )
+        loc.__dict__["_calls"] = cached
+    return cached
+
+
 class EquationsOfMotion:
     """Lagrange's equations with multipliers in block form.
 
@@ -41,7 +63,7 @@ class EquationsOfMotion:
 
     i.e. the augmented (KKT) system [[M, -Aᵀ], [A, 0]] [q̈; λ] = [Q - h; -(Ȧq̇ + ḃ)]. For a
     holonomic constraint f(q,t) = 0, A = ∂f/∂q and b = ∂f/∂t, so Aᵀλ is the generalized constraint
-    force. Matrices are SymPy ``ImmutableMatrix`` (``ImmutableSparseMatrix`` beyond 500 coordinates)
+    force. Matrices are SymPy ``ImmutableMatrix`` (a read-only ``SparseMatrix`` beyond 500 coordinates)
     in the user's coordinates (functions of :data:`pfaff.t`).
 
     Attributes
@@ -118,11 +140,16 @@ class EquationsOfMotion:
         for block in self.blocks:
             if block.local.kind != kind:
                 continue
+            calls = _placeholder_calls(block.local)
             for i, idx in enumerate(block.coords.tolist()):
                 rule = {}
                 for a, c in enumerate(idx):
                     rule[local_q(a)] = self.coordinates[c]
                     rule[local_qd(a)] = self.speeds[c]
+                # f(q_a) of a bare coordinate never evaluates further: build it without SymPy's
+                # eval (the same object, several times faster than letting xreplace rebuild it).
+                for call in calls:
+                    rule[call] = call.func(*(rule[a] for a in call.args), evaluate=False)
                 yield block, i, idx, rule
 
     @cached_property
@@ -175,7 +202,9 @@ class EquationsOfMotion:
 
     def _matrix(self, rows: int, cols: int, entries: dict) -> sp.MatrixBase:
         if max(rows, cols) > DENSE_SYMBOLIC_LIMIT:
-            return sp.ImmutableSparseMatrix(rows, cols, entries)
+            # SymPy's ImmutableSparseMatrix sorts all its entries into a Dict (seconds at N = 4096);
+            # the mutable SparseMatrix is built directly. Treat it as read-only.
+            return sp.SparseMatrix(rows, cols, entries)
         M = sp.zeros(rows, cols)
         for (i, j), e in entries.items():
             M[i, j] = e

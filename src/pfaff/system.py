@@ -121,7 +121,9 @@ class System:
         used: set[int] = set()
         problems: list[str] = []
         for e in exprs:
-            for d in e.atoms(sp.Derivative):
+            atoms = e.atoms(sp.Derivative, AppliedUndef, sp.Symbol)
+            derivs = [a for a in atoms if isinstance(a, sp.Derivative)]
+            for d in derivs:
                 if d in self._speed_index:
                     if not speeds:
                         problems.append(
@@ -135,17 +137,18 @@ class System:
                     problems.append(
                         f"contains the derivative {d} of something that is not a coordinate"
                     )
-            for f in e.atoms(AppliedUndef):
-                if f in self._index:
-                    used.add(self._index[f])
-                elif not any(f in d.atoms(AppliedUndef) for d in e.atoms(sp.Derivative)):
-                    problems.append(
-                        f"depends on `{f}`, which is not a coordinate of this system "
-                        f"(coordinates: {', '.join(map(str, self.coordinates))})"
-                    )
-            for s in e.free_symbols:
-                if s != t:
-                    self._parameters.add(s)
+            for f in atoms:
+                if isinstance(f, sp.Symbol):
+                    if f != t:
+                        self._parameters.add(f)
+                elif isinstance(f, AppliedUndef):
+                    if f in self._index:
+                        used.add(self._index[f])
+                    elif not any(f in d.atoms(AppliedUndef) for d in derivs):
+                        problems.append(
+                            f"depends on `{f}`, which is not a coordinate of this system "
+                            f"(coordinates: {', '.join(map(str, self.coordinates))})"
+                        )
         if problems:
             raise ModelError(f"{what}: " + "; ".join(dict.fromkeys(problems)))
         return tuple(sorted(used))
