@@ -41,17 +41,18 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     scale = 0.6 * r / max(abs(F), 1e-12)
     tang = gcf[1:][shown] / r
     et = np.stack([np.cos(th[shown]), -np.sin(th[shown])])
+    tscale = 0.35 * r / max(float(np.max(np.abs(tang))), 1e-300)  # own scale: these are small
     ax.quiver(
         px,
         py,
-        et[0] * tang * scale,
-        et[1] * tang * scale,
+        et[0] * tang * tscale,
+        et[1] * tang * tscale,
         angles="xy",
         scale_units="xy",
         scale=1,
         color="tab:green",
         width=0.004,
-        label="tangential constraint force",
+        label=f"tangential constraint force (max {np.max(np.abs(tang)):.3g}, own scale)",
     )
     ax.annotate(
         "",

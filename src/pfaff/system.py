@@ -69,6 +69,9 @@ class System:
     ----------
     coordinates : sequence of Function
         Generalized coordinates q (n of them), each a function of :data:`pfaff.t`.
+    name : str, optional
+    frame : sympy.physics.vector.ReferenceFrame, optional
+        Inertial frame in which positions and forces given as ``Vector`` are resolved.
 
     Examples
     --------
@@ -84,7 +87,8 @@ class System:
     Matrix([[2*x(t), 2*y(t)]])
     """
 
-    def __init__(self, coordinates: object, *, name: str = "system") -> None:
+    def __init__(self, coordinates: object, *, name: str = "system", frame: object = None) -> None:
+        self.frame = frame
         self.coordinates: tuple[sp.Function, ...] = validate_coordinates(coordinates)
         self.speeds: tuple[sp.Expr, ...] = tuple(speed(q) for q in self.coordinates)
         self.name = name
@@ -171,14 +175,9 @@ class System:
 
     def _vector(self, value: object, what: str, frame: object) -> tuple[sp.Expr, ...]:
         if isinstance(value, Vector):
-            frames = {f for _, f in value.args}
+            frame = frame if frame is not None else self.frame
             if frame is None:
-                if len(frames) != 1:
-                    raise ModelError(
-                        f"{what} is a sympy.physics.vector.Vector in {len(frames)} frames; pass "
-                        "`frame=` (the inertial frame) to take its components"
-                    )
-                frame = next(iter(frames))
+                frame = self._only_fixed_frame(value, what)
             comps = tuple(value.to_matrix(frame))
         elif isinstance(value, sp.MatrixBase):
             comps = tuple(value)
@@ -194,6 +193,20 @@ class System:
                 f"{what} must have 2 or 3 components (planar or spatial), got {len(comps)}"
             )
         return tuple(as_expr(c, f"{what} component {i}") for i, c in enumerate(comps))
+
+    @staticmethod
+    def _only_fixed_frame(value: Vector, what: str) -> object:
+        """The vector's single frame, when no coordinate or t turns it against its neighbours."""
+        frames = {f for _, f in value.args}
+        if len(frames) == 1:
+            (f,) = frames
+            moving = any(dcm.has(t) or dcm.atoms(AppliedUndef) for dcm in f._dcm_dict.values())
+            if not moving:
+                return f
+        raise ModelError(
+            f"{what} is a sympy.physics.vector.Vector and its inertial frame is ambiguous: pass "
+            "`frame=N` (the inertial frame) here or to pfaff.System(..., frame=N)"
+        )
 
     def _label(self, name: str | None, kind: str) -> str:
         if name is not None and not isinstance(name, str):
