@@ -44,7 +44,7 @@ class ConstraintPart:
     cols: np.ndarray  # shape (n_A, n_inst)
 
 
-def _slots(lin: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+def _slots(lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique sorted linear indices and, per entry, its slot (duplicates are summed)."""
     uniq, slot = np.unique(lin, return_inverse=True)
     return uniq, slot.ravel()
@@ -99,7 +99,7 @@ class NumericModel:
         cols = np.concatenate([self._mc, self._ac, n + self._ar])
         self.dense = N <= DENSE_LIMIT
         self._kkt_lin = cols * N + rows  # column-major: sorted order is CSC order
-        self._kkt_uniq, self._kkt_slot = _slots(self._kkt_lin, N * N)
+        self._kkt_uniq, self._kkt_slot = _slots(self._kkt_lin)
         self._frows = cat([np.ravel(p.forcing_rows) for p in dyn])
         self.stats = {"kkt_solves": 0}
 
