@@ -56,14 +56,12 @@ def check_constraint_rank(eom: EquationsOfMotion, seed: int = 20261122) -> None:
             )
         return
     G = sps.bmat([[sps.identity(n), A.T], [A, None]], format="csc")
+    message = (
+        f"redundant or inconsistent constraints: the {m}×{n} constraint matrix is rank deficient"
+    )
     try:
-        lu = spla.splu(G)
-    except RuntimeError as e:
-        raise ConstraintError(
-            f"redundant or inconsistent constraints: the {m}×{n} constraint matrix is rank deficient"
-        ) from e
-    d = np.abs(lu.U.diagonal())
+        d = np.abs(spla.splu(G).U.diagonal())
+    except RuntimeError as e:  # SuperLU: "Factor is exactly singular"
+        raise ConstraintError(message) from e
     if d.min() < 1e-11 * d.max():
-        raise ConstraintError(
-            f"redundant or inconsistent constraints: the {m}×{n} constraint matrix is rank deficient"
-        )
+        raise ConstraintError(message)

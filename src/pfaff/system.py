@@ -165,9 +165,15 @@ class System:
         return tuple(e.xreplace(rule) for e in exprs)
 
     def _add(
-        self, kind: str, exprs: tuple, coords: tuple[int, ...], name: str, dim: int = 0
+        self,
+        kind: str,
+        exprs: tuple,
+        coords: tuple[int, ...],
+        name: str,
+        dim: int = 0,
+        local: tuple[sp.Expr, ...] | None = None,
     ) -> Piece:
-        local = self._localize(exprs, coords)
+        local = self._localize(exprs, coords) if local is None else local
         piece = Piece(kind, exprs, coords, (kind, dim, *local), name, dim)
         self.pieces.append(piece)
         self._counts[kind] += 1
@@ -356,8 +362,9 @@ class System:
             expr = expr.lhs - expr.rhs
         e = as_expr(expr, f"constraint `{label}`")
         coords = self._scan((e,), f"holonomic constraint `{label}`", speeds=False)
-        self._check_new_constraint(e, coords, label)
-        self._add("holonomic", (e,), coords, label)
+        local = self._localize((e,), coords)
+        self._check_new_constraint(e, local, coords, label)
+        self._add("holonomic", (e,), coords, label, local=local)
 
     def add_velocity_constraint(self, expr: object, name: str | None = None) -> None:
         """Add a Pfaffian velocity constraint A(q,t) q̇ + b(q,t) = 0 (linear in q̇).
@@ -374,7 +381,7 @@ class System:
         label = self._label(name, "constraint")
         e = as_expr(expr, f"constraint `{label}`")
         coords = self._scan((e,), f"velocity constraint `{label}`", speeds=True)
-        local = self._localize((e,), coords)[0]
+        (local,) = self._localize((e,), coords)
         uds = [local_qd(a) for a in range(len(coords))]
         present = [u for u in uds if local.has(u)]
         if not present:
@@ -390,10 +397,12 @@ class System:
                 f"velocity constraint `{label}` is not Pfaffian: it is not linear in the "
                 f"velocities ({', '.join(nonlinear)}); write it as A(q,t)·q̇ + b(q,t) = 0"
             )
-        self._check_new_constraint(e, coords, label)
-        self._add("velocity", (e,), coords, label)
+        self._check_new_constraint(e, (local,), coords, label)
+        self._add("velocity", (e,), coords, label, local=(local,))
 
-    def _check_new_constraint(self, e: sp.Expr, coords: tuple[int, ...], label: str) -> None:
+    def _check_new_constraint(
+        self, e: sp.Expr, local: tuple[sp.Expr, ...], coords: tuple[int, ...], label: str
+    ) -> None:
         if not coords:
             raise ConstraintError(f"constraint `{label}` names no coordinate: {e} = 0")
         if self.n_constraints + 1 > self.n:
@@ -401,7 +410,7 @@ class System:
                 f"constraint `{label}` would make {self.n_constraints + 1} constraints on "
                 f"{self.n} coordinates: more independent constraints than coordinates is impossible"
             )
-        key = (*self._localize((e,), coords), coords)
+        key = (*local, coords)
         if key in self._constraint_keys:
             raise ConstraintError(
                 f"constraint `{label}` repeats constraint `{self._constraint_keys[key]}`: "
