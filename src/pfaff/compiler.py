@@ -11,6 +11,7 @@ import sympy as sp
 from .codegen import Kernel, constraint_layout, dynamics_layout, energy_exprs, make_kernel
 from .derive import Block
 from .errors import ParameterError
+from .fused import FusedKernel, build_fused
 from .numeric import ConstraintPart, DynamicsPart, NumericModel
 
 if TYPE_CHECKING:
@@ -104,7 +105,34 @@ def build_model(
         "holonomic_rows": np.array(eom.holonomic, dtype=bool),
         "parameters": {p.name: v for p, v in zip(params, values, strict=True)},
     }
-    return NumericModel(eom.n, dyn, con, eom.m, values, names)
+    model = NumericModel(eom.n, dyn, con, eom.m, values, names)
+    if not constraints_only:
+        model._fused = checked_fused(eom, model)
+    return model
+
+
+def checked_fused(eom: EquationsOfMotion, model: NumericModel) -> FusedKernel | None:
+    """The fused kernel of a small system, if it agrees with the template kernels at a test state."""
+    try:
+        fused = build_fused(eom)
+    except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
+        return None
+    if fused is None:
+        return None
+    rng = np.random.default_rng(7)
+    t0, q, qd = 0.3, rng.uniform(0.2, 0.9, model.n), rng.uniform(-0.5, 0.5, model.n)
+    try:
+        ref = model._kkt(t0, q, qd)
+        model._fused = fused
+        new = model._kkt(t0, q, qd)
+    except Exception:
+        return None
+    finally:
+        model._fused = None
+    for a, b in zip(ref, new, strict=True):
+        if not np.allclose(a, b, rtol=1e-9, atol=1e-12 * (1 + np.max(np.abs(a), initial=0))):
+            return None
+    return fused
 
 
 def compile_equations(eom: EquationsOfMotion, parameters: dict) -> NumericModel:

@@ -10,16 +10,20 @@ densely for small systems and with SciPy's sparse LU (SuperLU) otherwise.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from .codegen import Kernel
 from .errors import ConstraintError, StateError
+
+if TYPE_CHECKING:
+    from .fused import FusedKernel
 
 DENSE_LIMIT = 400  # n + m up to which the KKT system is assembled and solved densely
 
@@ -78,6 +82,7 @@ class NumericModel:
         m: int,
         param_values: Sequence[float],
         names: dict,
+        fused: FusedKernel | None = None,
     ) -> None:
         self.n, self.m = n, m
         self._dyn, self._con, self._p = dyn, con, list(param_values)
@@ -102,6 +107,7 @@ class NumericModel:
         self._kkt_uniq, self._kkt_slot = _slots(self._kkt_lin)
         self._frows = cat([np.ravel(p.forcing_rows) for p in dyn])
         self.stats = {"kkt_solves": 0}
+        self._fused = fused
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
@@ -171,7 +177,12 @@ class NumericModel:
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
-        t, q, qd = self._state(t, q, qd)
+        return self._residual(*self._state(t, q, qd))
+
+    def _residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self._fused is not None:
+            _, _, _, _, f, g = self._kkt(t, q, qd)
+            return f, g
         avals, b, _, f = self._constraints(t, q, qd)
         g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=self.m)
         return f, g
@@ -188,11 +199,25 @@ class NumericModel:
 
     def kkt_matrix(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """The symmetric augmented matrix [[M, Aᵀ], [A, 0]] and right-hand side [Q - h; -bias]."""
+        K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+        return K, np.concatenate([forcing, -bias])
+
+    def _kkt(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """K, Q - h, b, Ȧq̇ + ḃ, f and g = A q̇ + b at an (unchecked) state."""
+        n, m = self.n, self.m
+        N = n + m
+        if self._fused is not None:
+            fk = self._fused
+            v = np.array(fk.fn(t, *q.tolist(), *qd.tolist(), *self._p))
+            K = np.zeros((N, N))
+            K.flat[fk.kkt_index] = v[fk.kkt_source]
+            o = fk.offsets
+            forcing, bias, b, f = v[o[0] : o[1]], -v[o[1] : o[2]], v[o[2] : o[3]], v[o[3] :]
+            return K, forcing, b, bias, f, K[n:, :n] @ qd + b
         mvals, forcing = self._dynamics(t, q, qd)
-        avals, _, bias, _ = self._constraints(t, q, qd)
+        avals, b, bias, f = self._constraints(t, q, qd)
+        g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=m)
         data = np.concatenate([mvals, avals, avals])
-        N = self.n + self.m
-        rhs = np.concatenate([forcing, -bias])
         if self.dense:
             K = np.bincount(self._kkt_lin, weights=data, minlength=N * N).reshape(N, N).T
         else:
@@ -200,7 +225,71 @@ class NumericModel:
             K = sps.csc_matrix(
                 (vals, self._kkt_uniq % N, _indptr(self._kkt_uniq // N, N)), shape=(N, N)
             )
-        return K, rhs
+        return K, forcing, b, bias, f, g
+
+    def _solve_kkt(self, K: np.ndarray | sps.csc_matrix, rhs: np.ndarray, t: float) -> np.ndarray:
+        """Solve K x = rhs; a rank-deficient dense K gets the minimum-norm least-squares solution."""
+        self.stats["kkt_solves"] += 1
+        try:
+            if self.dense:
+                try:
+                    sol = np.linalg.solve(K, rhs)
+                except np.linalg.LinAlgError:
+                    sol = self._least_squares(K, rhs, t)
+            else:
+                sol = spla.splu(K).solve(rhs)
+        except (np.linalg.LinAlgError, RuntimeError, ValueError) as e:
+            raise ConstraintError(self._singular_message(t)) from e
+        if not math.isfinite(sol.sum()):
+            raise ConstraintError(self._singular_message(t))
+        return sol
+
+    def _least_squares(self, K: np.ndarray, rhs: np.ndarray, t: float) -> np.ndarray:
+        """Rank-deficient K: redundant constraints at this configuration (a linkage folded flat).
+
+        If the equations are consistent, the minimum-norm least-squares solution keeps the unique
+        q̈ and the minimum-norm λ. A constraint with no gradient at all, or inconsistent equations,
+        is an error.
+        """
+        n = self.n
+        A = K[n:, :n]
+        dead = np.flatnonzero(np.abs(A).max(axis=1, initial=0.0) == 0.0)
+        if dead.size:
+            names = ", ".join(f"`{self.constraint_names[i]}`" for i in dead[:5])
+            raise ConstraintError(
+                f"{self._singular_message(t)}; constraint {names} has a zero gradient here"
+            )
+        self.stats["kkt_lstsq"] = self.stats.get("kkt_lstsq", 0) + 1
+        sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
+        if np.linalg.norm(K @ sol - rhs) > 1e-8 * (1.0 + np.linalg.norm(rhs)):
+            raise ConstraintError(self._singular_message(t) + " (inconsistent equations)")
+        return sol
+
+    def _solve_accelerations(
+        self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f."""
+        if self._fused is not None and not (alpha or beta):
+            return self._fused_accelerations(t, q, qd)
+        K, forcing, _, bias, f, g = self._kkt(t, q, qd)
+        c = -bias
+        if alpha:
+            c = c - 2.0 * alpha * g
+        if beta:
+            c = c - beta * beta * f
+        sol = self._solve_kkt(K, np.concatenate([forcing, c]), t)
+        return sol[: self.n], -sol[self.n :]
+
+    def _fused_accelerations(
+        self, t: float, q: np.ndarray, qd: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        # the hot path of small systems: every NumPy call here costs about a microsecond
+        fk, n, N = self._fused, self.n, self.n + self.m
+        v = np.array(fk.fn(t, *q.tolist(), *qd.tolist(), *self._p))
+        K = np.zeros((N, N))
+        K.flat[fk.kkt_index] = v[fk.kkt_source]
+        sol = self._solve_kkt(K, v[fk.offsets[0] : fk.offsets[2]], t)
+        return sol[:n], -sol[n:]
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
@@ -215,21 +304,9 @@ class NumericModel:
         >>> round(float(qdd[1]), 12), round(float(lam[0]), 12)
         (2.0, -1.0)
         """
-        t, q, qd = self._state(t, q, qd)
-        K, rhs = self.kkt_matrix(t, q, qd)
-        self.stats["kkt_solves"] += 1
-        try:
-            if self.dense:
-                sol = scipy.linalg.solve(K, rhs, assume_a="sym", check_finite=False)
-            else:
-                sol = spla.splu(K).solve(rhs)
-        except (np.linalg.LinAlgError, RuntimeError, scipy.linalg.LinAlgError) as e:
-            raise ConstraintError(self._singular_message(t, q)) from e
-        if not np.all(np.isfinite(sol)):
-            raise ConstraintError(self._singular_message(t, q))
-        return sol[: self.n], -sol[self.n :]
+        return self._solve_accelerations(*self._state(t, q, qd))
 
-    def _singular_message(self, t: float, q: np.ndarray) -> str:
+    def _singular_message(self, t: float) -> str:
         return (
             f"the augmented matrix [[M, Aᵀ], [A, 0]] is singular at t = {t:g}: the constraints are "
             "redundant or inconsistent in this configuration, or M is singular on the admissible "

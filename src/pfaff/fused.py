@@ -1,0 +1,98 @@
+"""Compile stage, small systems: one fused scalar kernel for the whole KKT system.
+
+For a handful of coordinates the vectorized template kernels of :mod:`pfaff.codegen` spend their
+time in NumPy call overhead on arrays of length one. Here the whole system — M, A, Q - h, b,
+Ȧq̇ + ḃ and f — is generated as a single Python function on floats (``math`` module, common
+subexpressions shared), whose flat output is scattered into the dense augmented matrix by
+precomputed indices. The result is checked against the template kernels before it is used.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import sympy as sp
+
+from .symbols import accel, t
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from .equations import EquationsOfMotion
+
+FUSED_LIMIT = 32  # n + m up to which a fused scalar kernel is generated
+
+
+@dataclass(frozen=True)
+class FusedKernel:
+    """Flat outputs ``[M upper..., A entries..., Q - h (n), -bias (m), b (m), f (m)]`` and slots.
+
+    Attributes
+    ----------
+    fn : callable
+        ``fn(t, q_0..q_{n-1}, qd_0..qd_{n-1}, *params) -> list of float``.
+    kkt_index, kkt_source : ndarray of int
+        ``K.flat[kkt_index] = out[kkt_source]`` fills the symmetric augmented matrix
+        [[M, Aᵀ], [A, 0]] of shape (n+m, n+m).
+    offsets : tuple of int
+        Start of the forcing, -bias, b and f blocks in the output (forcing and -bias together are
+        the right-hand side of the augmented system).
+    """
+
+    fn: Callable
+    kkt_index: np.ndarray
+    kkt_source: np.ndarray
+    offsets: tuple[int, int, int, int]
+
+
+def _plain(eom: EquationsOfMotion) -> tuple[dict, list[sp.Symbol], list[sp.Symbol]]:
+    """Replace q(t), q̇(t) (and q̈ by 0) with plain symbols so ``math`` lambdify can take floats."""
+    qs = [sp.Symbol(f"_fq{i}") for i in range(eom.n)]
+    qds = [sp.Symbol(f"_fqd{i}") for i in range(eom.n)]
+    rule: dict = {accel(c): sp.S.Zero for c in eom.coordinates}
+    rule.update(dict(zip(eom.speeds, qds, strict=True)))
+    return rule, qs, qds
+
+
+def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
+    """Generate the fused kernel of a small system, or None when it is too big."""
+    n, m = eom.n, eom.m
+    if n + m > FUSED_LIMIT:
+        return None
+    rule, qs, qds = _plain(eom)
+    qrule = dict(zip(eom.coordinates, qs, strict=True))
+    M, A = eom.mass_matrix, eom.constraint_matrix
+    mass = [(i, j) for i in range(n) for j in range(i, n) if M[i, j] != 0]
+    acon = [(i, j) for i in range(m) for j in range(n) if A[i, j] != 0]
+    bias = [
+        e.xreplace({accel(c): 0 for c in eom.coordinates}) for e in eom.acceleration_constraints
+    ]
+    f = [sp.S.Zero if e is None else e for e in eom.holonomic_constraints]
+    exprs = (
+        [M[i, j] for i, j in mass]
+        + [A[i, j] for i, j in acon]
+        + list(eom.forcing)
+        + [-e for e in bias]
+        + list(eom.constraint_bias)
+        + f
+    )
+    plain = [sp.sympify(e).xreplace(rule).xreplace(qrule) for e in exprs]
+    args = [t, *qs, *qds, *eom.parameters]
+    fn = sp.lambdify(args, plain, modules="math", cse=True, docstring_limit=0)
+    N = n + m
+    index, source = [], []
+    for s, (i, j) in enumerate(mass):
+        index += [i * N + j, j * N + i] if i != j else [i * N + j]
+        source += [s, s] if i != j else [s]
+    for s, (i, j) in enumerate(acon, start=len(mass)):
+        index += [(n + i) * N + j, j * N + n + i]
+        source += [s, s]
+    off = len(mass) + len(acon)
+    return FusedKernel(
+        fn,
+        np.array(index, dtype=np.int64),
+        np.array(source, dtype=np.int64),
+        (off, off + n, off + n + m, off + n + 2 * m),
+    )
