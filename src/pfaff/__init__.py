@@ -13,11 +13,14 @@ from .errors import (
     ModelTypeError,
     ParameterError,
     PfaffError,
+    SimulationError,
     StateError,
 )
 from .numeric import NumericModel
+from .simulation import simulate
 from .symbols import coordinates, t
 from .system import System
+from .trajectory import Trajectory
 from .work import ForceWork
 
 __all__ = [
@@ -29,11 +32,14 @@ __all__ = [
     "NumericModel",
     "ParameterError",
     "PfaffError",
+    "SimulationError",
     "Solution",
     "StateError",
     "System",
+    "Trajectory",
     "coordinates",
     "models",
+    "simulate",
     "t",
 ]
 __version__ = "0.1.0"

@@ -30,3 +30,7 @@ class ParameterError(PfaffError):
 
 class StateError(PfaffError):
     """A numeric state (t, q, q̇) has the wrong shape or is not finite."""
+
+
+class SimulationError(PfaffError, RuntimeError):
+    """A simulation failed (raised by ``simulate(..., throw=True)``; otherwise a status)."""

@@ -33,6 +33,14 @@ class FusedKernel:
     ----------
     fn : callable
         ``fn(t, q_0..q_{n-1}, qd_0..qd_{n-1}, *params) -> list of float``.
+    vfn : callable
+        The same outputs with NumPy, vectorized over many states (arguments of shape (k,)).
+    efn : callable
+        ``[T, V, T(q, 0, t)]``, vectorized like ``vfn``.
+    kfn : callable
+        ``kfn(t, q.., qd.., *params, alpha, beta) -> (K as nested lists, rhs list)``: the augmented
+        system with the Baumgarte-stabilized constraint rows −bias − 2α(A q̇ + b) − β² f, ready
+        for LAPACK (the ODE right-hand side of small systems).
     kkt_index, kkt_source : ndarray of int
         ``K.flat[kkt_index] = out[kkt_source]`` fills the symmetric augmented matrix
         [[M, Aᵀ], [A, 0]] of shape (n+m, n+m).
@@ -42,6 +50,9 @@ class FusedKernel:
     """
 
     fn: Callable
+    vfn: Callable
+    efn: Callable
+    kfn: Callable
     kkt_index: np.ndarray
     kkt_source: np.ndarray
     offsets: tuple[int, int, int, int]
@@ -81,6 +92,14 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
     plain = [sp.sympify(e).xreplace(rule).xreplace(qrule) for e in exprs]
     args = [t, *qs, *qds, *eom.parameters]
     fn = sp.lambdify(args, plain, modules="math", cse=True, docstring_limit=0)
+    vfn = sp.lambdify(args, plain, modules="numpy", cse=True, docstring_limit=0)
+    T, V = (
+        sp.sympify(e).xreplace(rule).xreplace(qrule)
+        for e in (eom.kinetic_energy, eom.potential_energy)
+    )
+    T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
+    efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
+    kfn = _kkt_function(plain, mass, acon, n, m, args, qds)
     N = n + m
     index, source = [], []
     for s, (i, j) in enumerate(mass):
@@ -92,7 +111,34 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
     off = len(mass) + len(acon)
     return FusedKernel(
         fn,
+        vfn,
+        efn,
+        kfn,
         np.array(index, dtype=np.int64),
         np.array(source, dtype=np.int64),
         (off, off + n, off + n + m, off + n + 2 * m),
+    )
+
+
+def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list):
+    """Generate ``kfn`` (see :class:`FusedKernel`) from the plain output expressions."""
+    N = n + m
+    K = [[sp.S.Zero] * N for _ in range(N)]
+    for s, (i, j) in enumerate(mass):
+        K[i][j] = K[j][i] = plain[s]
+    g = [sp.S.Zero] * m
+    for s, (i, j) in enumerate(acon, start=len(mass)):
+        K[n + i][j] = K[j][n + i] = plain[s]
+        g[i] += plain[s] * qds[j]
+    off = len(mass) + len(acon)
+    forcing = plain[off : off + n]
+    neg_bias = plain[off + n : off + n + m]
+    b, f = plain[off + n + m : off + n + 2 * m], plain[off + n + 2 * m :]
+    alpha, beta = sp.Symbol("_alpha"), sp.Symbol("_beta")
+    c = [
+        nb - 2 * alpha * (gi + bi) - beta**2 * fi
+        for nb, gi, bi, fi in zip(neg_bias, g, b, f, strict=True)
+    ]
+    return sp.lambdify(
+        [*args, alpha, beta], [K, forcing + c], modules="math", cse=True, docstring_limit=0
     )
