@@ -16,6 +16,7 @@ from .errors import (
     SimulationError,
     StateError,
 )
+from .initial import consistent_state
 from .numeric import NumericModel
 from .simulation import simulate
 from .symbols import coordinates, t
@@ -37,6 +38,7 @@ __all__ = [
     "StateError",
     "System",
     "Trajectory",
+    "consistent_state",
     "coordinates",
     "models",
     "simulate",

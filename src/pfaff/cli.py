@@ -1,4 +1,9 @@
-"""Command-line interface: ``pfaff demo ring --particles N [--force F] [--json] [--plot FILE]``."""
+"""Command-line interface.
+
+``pfaff demo ring --particles N [--force F] [--json] [--plot FILE]`` derives and solves the seed's
+ring; ``--simulate --t-end T [--method M] [--output traj.nc|.csv]`` integrates it in time, as does
+``pfaff demo pendulum --simulate`` for the Cartesian pendulum.
+"""
 
 from __future__ import annotations
 
@@ -60,14 +65,89 @@ def build_parser() -> argparse.ArgumentParser:
     ring.add_argument("--theta-dot", type=_finite, default=0.0, help="spin rate θ̇ (default 0)")
     ring.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     ring.add_argument(
-        "--plot", metavar="FILE.png", help="write a figure of the ring and its multipliers"
+        "--plot",
+        metavar="FILE.png",
+        help="write a figure of the ring and its multipliers (with --simulate: of the run)",
     )
+    _simulation_options(ring)
+    pend = dsub.add_parser("pendulum", help="the Cartesian pendulum (x, y) with its rod constraint")
+    pend.add_argument("--mass", type=_positive, default=1.0, help="bob mass m (default 1)")
+    pend.add_argument("--length", type=_positive, default=1.0, help="rod length L (default 1)")
+    pend.add_argument("--gravity", type=_finite, default=9.81, help="g (default 9.81)")
+    pend.add_argument(
+        "--angle", type=_finite, default=90.0, help="release angle from the vertical, degrees"
+    )
+    pend.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+    pend.add_argument("--plot", metavar="FILE.png", help="write a figure of the run")
+    _simulation_options(pend)
     return p
+
+
+def _simulation_options(p: argparse.ArgumentParser) -> None:
+    from .simulation import METHODS
+
+    g = p.add_argument_group("simulation")
+    g.add_argument("--simulate", action="store_true", help="integrate the motion in time")
+    g.add_argument("--t-end", type=_positive, default=2.0, help="end time (default 2)")
+    g.add_argument("--method", choices=list(METHODS), default="projection", help="integrator")
+    g.add_argument("--rtol", type=_positive, default=1e-9, help="relative tolerance")
+    g.add_argument("--atol", type=_positive, default=1e-11, help="absolute tolerance")
+    g.add_argument(
+        "--output", metavar="FILE.nc|FILE.csv", help="write the trajectory (netCDF or CSV)"
+    )
+
+
+def _write_outputs(traj, args: argparse.Namespace, rep: dict) -> None:
+    if args.output:
+        suffix = args.output.rsplit(".", 1)[-1].lower()
+        if suffix not in ("nc", "csv"):
+            raise PfaffError(f"--output must end in .nc or .csv; got {args.output!r}")
+        (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
+        rep["output"] = args.output
+    if args.plot:
+        traj.plot(args.plot)
+        rep["plot"] = args.plot
+
+
+def run_simulation(args: argparse.Namespace) -> int:
+    """Run ``pfaff demo ring|pendulum --simulate``."""
+    from .simdemo import format_simulation, pendulum_simulation, ring_simulation
+
+    opts = {"t_end": args.t_end, "method": args.method, "rtol": args.rtol, "atol": args.atol}
+    if args.demo == "ring":
+        rep, traj = ring_simulation(
+            args.particles,
+            force=args.force,
+            mass=args.mass,
+            radius=args.radius,
+            theta_dot=args.theta_dot,
+            opts=opts,
+        )
+    else:
+        rep, traj = pendulum_simulation(
+            mass=args.mass,
+            length=args.length,
+            gravity=args.gravity,
+            angle_deg=args.angle,
+            opts=opts,
+        )
+    _write_outputs(traj, args, rep)
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print(format_simulation(rep))
+        for key in ("output", "plot"):
+            if key in rep:
+                print(f"Wrote {rep[key]}")
+    return 0 if traj.status == "success" else 3
 
 
 def run_ring(args: argparse.Namespace) -> int:
     """Run ``pfaff demo ring``."""
     from .demo import format_report, ring_report
+
+    if args.simulate:
+        return run_simulation(args)
 
     rep = ring_report(
         args.particles,
@@ -91,12 +171,49 @@ def run_ring(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_pendulum(args: argparse.Namespace) -> int:
+    """``pfaff demo pendulum`` without --simulate: the equations and the tension at release."""
+    import math
+
+    import numpy as np
+
+    from . import models
+
+    eom = models.cartesian_pendulum().equations()
+    model = eom.compile({"m": args.mass, "g": args.gravity, "L": args.length})
+    a = math.radians(args.angle)
+    q = np.array([args.length * math.sin(a), -args.length * math.cos(a)])
+    qdd, lam = model.accelerations(0.0, q, np.zeros(2))
+    rep = {
+        "equations": [str(e) for e in eom.lagrange_equations],
+        "constraint": str(eom.holonomic_constraints[0]),
+        "q": q.tolist(),
+        "qdd": qdd.tolist(),
+        "multipliers": lam.tolist(),
+        "tension": float(-2 * args.length * lam[0]),
+        "tension_exact": args.mass * args.gravity * math.cos(a),
+    }
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print("Cartesian pendulum, q = (x, y):")
+        for e in rep["equations"]:
+            print("  ", e)
+        print(f"   constraint f = {rep['constraint']} = 0")
+        print(f"At release ({args.angle:g}° from the vertical, at rest): q̈ = {rep['qdd']}")
+        print(f"   λ = {rep['multipliers'][0]:.12g}, rod tension −2Lλ = {rep['tension']:.12g}")
+        print("Add --simulate --t-end T to integrate the motion.")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``pfaff`` console script."""
     args = build_parser().parse_args(argv)
     try:
         if args.command == "demo" and args.demo == "ring":
             return run_ring(args)
+        if args.command == "demo" and args.demo == "pendulum":
+            return run_simulation(args) if args.simulate else run_pendulum(args)
     except (PfaffError, OSError) as e:
         print(f"pfaff: error: {e}", file=sys.stderr)
         return 2
