@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import sympy as sp
 
+from .smallsolve import schur_solver
 from .symbols import accel, t
 
 if TYPE_CHECKING:
@@ -41,6 +42,11 @@ class FusedKernel:
         ``kfn(t, q.., qd.., *params, alpha, beta) -> (K as nested lists, rhs list)``: the augmented
         system with the Baumgarte-stabilized constraint rows −bias − 2α(A q̇ + b) − β² f, ready
         for LAPACK (the ODE right-hand side of small systems).
+    ofn, sfn : callable
+        ``ofn`` (same arguments as ``kfn``) gives the flat [M entries, A entries, Q − h, c] and
+        ``sfn(*that)`` q̈ by straight-line Schur-complement code (:mod:`pfaff.smallsolve`).
+    pfn : callable
+        ``pfn(t, q.., qd.., *params) -> [A (nested lists), f, A q̇ + b, diag M]`` for projection.
     kkt_index, kkt_source : ndarray of int
         ``K.flat[kkt_index] = out[kkt_source]`` fills the symmetric augmented matrix
         [[M, Aᵀ], [A, 0]] of shape (n+m, n+m).
@@ -53,6 +59,9 @@ class FusedKernel:
     vfn: Callable
     efn: Callable
     kfn: Callable
+    ofn: Callable
+    sfn: Callable
+    pfn: Callable
     kkt_index: np.ndarray
     kkt_source: np.ndarray
     offsets: tuple[int, int, int, int]
@@ -99,7 +108,9 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
     )
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
-    kfn = _kkt_function(plain, mass, acon, n, m, args, qds)
+    kfn, ofn = _kkt_function(plain, mass, acon, n, m, args, qds)
+    sfn = schur_solver(n, m, mass, acon)
+    pfn = _projection_function(plain, mass, acon, n, m, args, qds)
     N = n + m
     index, source = [], []
     for s, (i, j) in enumerate(mass):
@@ -114,6 +125,9 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
         vfn,
         efn,
         kfn,
+        ofn,
+        sfn,
+        pfn,
         np.array(index, dtype=np.int64),
         np.array(source, dtype=np.int64),
         (off, off + n, off + n + m, off + n + 2 * m),
@@ -139,6 +153,27 @@ def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: lis
         nb - 2 * alpha * (gi + bi) - beta**2 * fi
         for nb, gi, bi, fi in zip(neg_bias, g, b, f, strict=True)
     ]
-    return sp.lambdify(
+    kfn = sp.lambdify(
         [*args, alpha, beta], [K, forcing + c], modules="math", cse=True, docstring_limit=0
     )
+    ofn = sp.lambdify(
+        [*args, alpha, beta], plain[: off + n] + c, modules="math", cse=True, docstring_limit=0
+    )
+    return kfn, ofn
+
+
+def _projection_function(
+    plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list
+):
+    """Generate ``pfn`` (see :class:`FusedKernel`)."""
+    A = [[sp.S.Zero] * n for _ in range(m)]
+    for s, (i, j) in enumerate(acon, start=len(mass)):
+        A[i][j] = plain[s]
+    off = len(mass) + len(acon)
+    b, f = plain[off + n + m : off + n + 2 * m], plain[off + n + 2 * m :]
+    g = [sum((A[i][j] * qds[j] for j in range(n)), b[i]) for i in range(m)]
+    d = [sp.S.Zero] * n
+    for s, (i, j) in enumerate(mass):
+        if i == j:
+            d[i] = plain[s]
+    return sp.lambdify(args, [A, f, g, d], modules="math", cse=True, docstring_limit=0)

@@ -296,19 +296,22 @@ class NumericModel:
                 return out
 
             return fun
-        kfn, p, gesv = fk.kfn, (*self._p, alpha, beta), _gesv
+        kfn, ofn, sfn, p, gesv = fk.kfn, fk.ofn, fk.sfn, (*self._p, alpha, beta), _gesv
+        isfinite = math.isfinite
 
         def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
-            K, r = kfn(t, *y.tolist(), *p)
-            x, info = gesv(K, r)[2:]
-            if info != 0:  # a redundant configuration: the careful path
-                x = self._solve_kkt(np.array(K), np.array(r), t)
-            out = np.empty(2 * n)
-            out[:n] = y[n:]
-            out[n:] = x[:n]
-            if not math.isfinite(out.sum()):
+            yl = y.tolist()
+            try:
+                qdd = sfn(*ofn(t, *yl, *p))
+            except (ValueError, ZeroDivisionError):  # M or A M⁻¹Aᵀ not definite: LAPACK
+                K, r = kfn(t, *yl, *p)
+                x, info = gesv(K, r)[2:]
+                if info != 0:  # a redundant configuration: the careful path
+                    x = self._solve_kkt(np.array(K), np.array(r), t)
+                qdd = x[:n].tolist()
+            if not isfinite(sum(qdd)):
                 raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-            return out
+            return np.array(yl[n:] + qdd)
 
         return fused_fun
 

@@ -72,6 +72,12 @@ class Projector:
         self.stats = {"projections": 0, "projection_iterations": 0}
 
     def _matrices(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        fk = getattr(self.model, "_fused", None)
+        if fk is not None:
+            A, f, g, d = fk.pfn(t, *q.tolist(), *qd.tolist(), *self.model._p)
+            d = np.array(d)
+            d[~(d > 0)] = 1.0
+            return np.array(A), d, np.array(f), np.array(g)
         K, _, _, _, f, g = self.model._kkt(t, q, qd)
         n = self.model.n
         if sps.issparse(K):
@@ -92,6 +98,11 @@ class Projector:
             qn, qdn, it = self.custom(t, q, qd, tol=self.tol, max_iter=self.max_iter)
             self._count(it)
             return qn, qdn, it > 0
+        fk = getattr(self.model, "_fused", None)
+        if fk is not None:  # small systems: look before converting anything to arrays
+            _, f, g, _ = fk.pfn(t, *q.tolist(), *qd.tolist(), *self.model._p)
+            if max(map(abs, f + g)) <= self.tol:
+                return q, qd, False
         A, d, f, g = self._matrices(t, q, qd)
         if max(np.abs(f).max(), np.abs(g).max()) <= self.tol:
             return q, qd, False
