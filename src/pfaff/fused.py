@@ -47,6 +47,10 @@ class FusedKernel:
         ``sfn(*that)`` q̈ by straight-line Schur-complement code (:mod:`pfaff.smallsolve`).
     pfn : callable
         ``pfn(t, q.., qd.., *params) -> [A (nested lists), f, A q̇ + b, diag M]`` for projection.
+    qfn, cfn : callable
+        The same as flat lists for small-system projection in plain Python:
+        ``qfn(...) -> [diag M..., A entries..., f..., g...]`` and
+        ``cfn(*diag, *A entries, *zeros(n), *r, shift) -> D⁻¹Aᵀ(A D⁻¹Aᵀ + δ²I)⁻¹ r``.
     kkt_index, kkt_source : ndarray of int
         ``K.flat[kkt_index] = out[kkt_source]`` fills the symmetric augmented matrix
         [[M, Aᵀ], [A, 0]] of shape (n+m, n+m).
@@ -62,6 +66,8 @@ class FusedKernel:
     ofn: Callable
     sfn: Callable
     pfn: Callable
+    qfn: Callable
+    cfn: Callable
     kkt_index: np.ndarray
     kkt_source: np.ndarray
     offsets: tuple[int, int, int, int]
@@ -110,7 +116,8 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
     kfn, ofn = _kkt_function(plain, mass, acon, n, m, args, qds)
     sfn = schur_solver(n, m, mass, acon)
-    pfn = _projection_function(plain, mass, acon, n, m, args, qds)
+    pfn, qfn = _projection_function(plain, mass, acon, n, m, args, qds)
+    cfn = schur_solver(n, m, [(i, i) for i in range(n)], acon, damped=True)
     N = n + m
     index, source = [], []
     for s, (i, j) in enumerate(mass):
@@ -128,6 +135,8 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
         ofn,
         sfn,
         pfn,
+        qfn,
+        cfn,
         np.array(index, dtype=np.int64),
         np.array(source, dtype=np.int64),
         (off, off + n, off + n + m, off + n + 2 * m),
@@ -176,4 +185,7 @@ def _projection_function(
     for s, (i, j) in enumerate(mass):
         if i == j:
             d[i] = plain[s]
-    return sp.lambdify(args, [A, f, g, d], modules="math", cse=True, docstring_limit=0)
+    pfn = sp.lambdify(args, [A, f, g, d], modules="math", cse=True, docstring_limit=0)
+    flat = d + [A[i][j] for i, j in acon] + list(f) + g
+    qfn = sp.lambdify(args, flat, modules="math", cse=True, docstring_limit=0)
+    return pfn, qfn

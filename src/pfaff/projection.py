@@ -23,6 +23,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 DAMPING = 1e-7  # δ / σ_max
+q_arr = np.array
 _gesv = scipy.linalg.lapack.dgesv
 
 
@@ -99,10 +100,10 @@ class Projector:
             self._count(it)
             return qn, qdn, it > 0
         fk = getattr(self.model, "_fused", None)
-        if fk is not None:  # small systems: look before converting anything to arrays
-            _, f, g, _ = fk.pfn(t, *q.tolist(), *qd.tolist(), *self.model._p)
-            if max(map(abs, f + g)) <= self.tol:
-                return q, qd, False
+        if fk is not None:  # small systems: plain Python floats, no arrays
+            out = self._small(fk, t, q.tolist(), qd.tolist())
+            if out is not None:
+                return out
         A, d, f, g = self._matrices(t, q, qd)
         if max(np.abs(f).max(), np.abs(g).max()) <= self.tol:
             return q, qd, False
@@ -116,6 +117,34 @@ class Projector:
             qd -= _correction(A, d, g)  # exact up to the damping: g is linear in q̇
         self._count(max(it, 1))
         return q, qd, True
+
+    def _small(self, fk: Any, t: float, q: list, qd: list) -> tuple | None:
+        """The projection of a fused small model; None to take the general path (rank loss)."""
+        n, m, p, tol = self.model.n, self.model.m, self.model._p, self.tol
+        v = fk.qfn(t, *q, *qd, *p)
+        nA = len(v) - n - 2 * m
+        f, g = v[n + nA : n + nA + m], v[n + nA + m :]
+        if max(map(abs, f + g)) <= tol:
+            return q_arr(q), q_arr(qd), False
+        zeros = [0.0] * n
+        shift = DAMPING**2
+        it = 0
+        try:
+            while max(map(abs, f)) > tol and it < self.max_iter:
+                d = [x if x > 0 else 1.0 for x in v[:n]]
+                dq = fk.cfn(*d, *v[n : n + nA], *zeros, *f, shift)
+                q = [a - b for a, b in zip(q, dq, strict=True)]
+                it += 1
+                v = fk.qfn(t, *q, *qd, *p)
+                f, g = v[n + nA : n + nA + m], v[n + nA + m :]
+            if max(map(abs, g)) > tol:
+                d = [x if x > 0 else 1.0 for x in v[:n]]
+                dv = fk.cfn(*d, *v[n : n + nA], *zeros, *g, shift)
+                qd = [a - b for a, b in zip(qd, dv, strict=True)]
+        except (ValueError, ZeroDivisionError):
+            return None
+        self._count(max(it, 1))
+        return q_arr(q), q_arr(qd), True
 
     def _count(self, it: int) -> None:
         if it:

@@ -78,9 +78,17 @@ class _Writer:
 
 
 def schur_solver(
-    n: int, m: int, mass: list[tuple[int, int]], acon: list[tuple[int, int]]
+    n: int,
+    m: int,
+    mass: list[tuple[int, int]],
+    acon: list[tuple[int, int]],
+    *,
+    damped: bool = False,
 ) -> Callable[..., list[float]]:
     """Generate ``solve(*mass_values, *A_values, *F, *c) -> q̈ (list of n floats)``.
+
+    With ``damped=True`` the function takes one more argument ``shift`` and solves with
+    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.projection`).
 
     Parameters
     ----------
@@ -113,6 +121,10 @@ def schur_solver(
     for i in range(m):
         for j in range(i + 1):
             S[i][j] = S[j][i] = w.let(_dot(list(zip(A[i], Z[j], strict=True))))
+    if damped and m:
+        tr = w.let(f"shift * ({' + '.join(S[i][i] or '0.0' for i in range(m))})")
+        for i in range(m):
+            S[i][i] = w.let(f"{S[i][i] or '0.0'} + {tr}")
     r = []
     for i in range(m):
         acc = _dot(list(zip(A[i], y, strict=True)))
@@ -123,7 +135,7 @@ def schur_solver(
         acc = _dot([(Z[k][i], lam[k]) for k in range(m)])
         terms = [x for x in (y[i], acc) if x is not None]
         out.append(" + ".join(terms) if terms else "0.0")
-    args = ", ".join(Ms + As + Fs + cs)
+    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []))
     src = f"def solve({args}):\n" + "\n".join(w.lines) + f"\n    return [{', '.join(out)}]\n"
     namespace: dict = {"sqrt": math.sqrt}
     exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
