@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import sympy as sp
 
+from .errors import ModelError
 from .symbols import local_q, local_qd, t
 
 if TYPE_CHECKING:
@@ -56,7 +57,6 @@ class Local:
         return {a: e for a, e in out.items() if e != 0}
 
 
-@dataclass
 class Block:
     """A template and the instances that share it.
 
@@ -65,17 +65,54 @@ class Block:
     local : Local
         The derived template.
     coords : ndarray of int, shape (n_inst, k)
-        Global coordinate index of each local coordinate, per instance.
+        Global coordinate index of each local coordinate, per instance (made on first use for a
+        family block).
     rows : ndarray of int, shape (n_inst,) or None
         Global constraint (multiplier) index per instance, for constraint blocks.
     pieces : list of Piece
         The model pieces of the instances.
+    progressions : list of (start, step) or None
+        For a family block: local coordinate a of instance i is ``start + step * i``.
+    row0 : int
+        For a family constraint block: the row of instance 0 (rows are consecutive).
     """
 
-    local: Local
-    coords: np.ndarray
-    rows: np.ndarray | None
-    pieces: list
+    def __init__(
+        self,
+        local: Local,
+        coords: np.ndarray | None,
+        rows: np.ndarray | None,
+        pieces: list,
+        *,
+        progressions: list[tuple[int, int]] | None = None,
+        n_inst: int = 0,
+        row0: int = -1,
+    ) -> None:
+        self.local, self.pieces = local, pieces
+        self._coords, self._rows = coords, rows
+        self.progressions, self.row0 = progressions, row0
+        self.n_inst = coords.shape[0] if coords is not None else n_inst
+
+    @property
+    def coords(self) -> np.ndarray:
+        """Global coordinate indices, shape (n_inst, k)."""
+        if self._coords is None:
+            i = np.arange(self.n_inst, dtype=np.int64)
+            cols = [start + step * i for start, step in self.progressions or []]
+            self._coords = np.stack(cols, axis=1) if cols else np.zeros((self.n_inst, 0), np.int64)
+        return self._coords
+
+    @property
+    def rows(self) -> np.ndarray | None:
+        """Global constraint rows, shape (n_inst,), or None for a dynamics block."""
+        if self._rows is None and self.row0 >= 0:
+            self._rows = np.arange(self.row0, self.row0 + self.n_inst, dtype=np.int64)
+        return self._rows
+
+    @property
+    def family(self) -> bool:
+        """True for a block made from one family template."""
+        return self.progressions is not None
 
 
 def _tidy(e: sp.Expr) -> sp.Expr:
@@ -180,13 +217,17 @@ def group(system: System) -> list[Block]:
     """Group the model's pieces by template and derive each template once."""
     groups: dict[tuple, list[tuple[Piece, int]]] = {}
     row = 0
+    cache: dict[tuple, Local] = {}
+    blocks = []
     for p in system.pieces:
         is_con = p.kind in ("holonomic", "velocity")
-        groups.setdefault(p.key, []).append((p, row if is_con else -1))
-        row += is_con
-    blocks = []
+        if p.template is not None:
+            blocks.append(_family_block(p, row if is_con else -1, cache))
+        else:
+            groups.setdefault(p.key, []).append((p, row if is_con else -1))
+        row += p.count if is_con else 0
     for key, members in groups.items():
-        local = derive_template(key, len(members[0][0].coords))
+        local = _derived(key, len(members[0][0].coords), cache)
         coords = np.array([p.coords for p, _ in members], dtype=np.int64).reshape(len(members), -1)
         rows = (
             np.array([r for _, r in members], dtype=np.int64)
@@ -197,11 +238,30 @@ def group(system: System) -> list[Block]:
     return blocks
 
 
+def _derived(key: tuple, k: int, cache: dict) -> Local:
+    if key not in cache:
+        cache[key] = derive_template(key, k)
+    return cache[key]
+
+
+def _family_block(p: Piece, row0: int, cache: dict) -> Block:
+    tm = p.template
+    local = _derived(p.key, len(tm.slots), cache)
+    prog = [tm.progression(a) for a in range(len(tm.slots))]
+    return Block(local, None, None, [p], progressions=prog, n_inst=tm.count, row0=row0)
+
+
 def derive(system: System) -> EquationsOfMotion:
     """Derive the equations of motion of ``system`` and check its constraints for redundancy."""
     from .equations import EquationsOfMotion
     from .rank import check_constraint_rank
 
+    if system.n == 0:
+        raise ModelError("a system needs at least one coordinate (ordinary or in a family)")
     eom = EquationsOfMotion(system, group(system))
+    if eom.family:
+        from .memory import check_memory
+
+        check_memory(eom)
     check_constraint_rank(eom)
     return eom

@@ -10,6 +10,8 @@ import sympy as sp
 from sympy.physics.vector.printing import vlatex
 
 from .derive import Block, Local
+from .errors import PfaffError
+from .family import LazySeq
 from .symbols import accel, local_q, local_qd, speed
 
 if TYPE_CHECKING:
@@ -18,6 +20,14 @@ if TYPE_CHECKING:
 
 DENSE_SYMBOLIC_LIMIT = 500  # above this many coordinates, M and A are sparse
 SOLVE_LIMIT = 40  # largest n + m for the symbolic solve
+SYMBOLIC_LIMIT = 100_000  # largest n for symbolic matrices (the templates are derived at any n)
+
+
+def _mapped(seq, fn):
+    """``fn`` over a sequence: a tuple for short ones, lazily for long ones."""
+    if len(seq) <= 4096 and not isinstance(seq, LazySeq):
+        return tuple(fn(x) for x in seq)
+    return LazySeq(len(seq), lambda i: fn(seq[i]))
 
 
 class Solution(dict):
@@ -108,21 +118,34 @@ class EquationsOfMotion:
         self.system = system
         self.blocks = blocks
         if system is not None:
-            cons = system.constraints
             coordinates = system.coordinates
-            constraint_names = [p.name for p in cons]
-            holonomic = [p.kind == "holonomic" for p in cons]
+            constraint_names, holonomic = system.constraint_rows()
             parameters = system.parameters
-        self.coordinates: tuple = tuple(coordinates or ())
-        self.speeds = tuple(speed(q) for q in self.coordinates)
-        self.accels = tuple(accel(q) for q in self.coordinates)
-        self.constraint_names: list[str] = list(constraint_names or [])
-        self.holonomic: list[bool] = list(holonomic or [])
-        self.parameters: tuple = tuple(parameters or ())
-        self.multipliers: tuple[sp.Symbol, ...] = tuple(
-            sp.Symbol(f"lambda{i + 1}") for i in range(len(self.constraint_names))
+        coordinates = () if coordinates is None else coordinates
+        self.coordinates = coordinates if isinstance(coordinates, LazySeq) else tuple(coordinates)
+        self.constraint_names = (
+            constraint_names
+            if isinstance(constraint_names, LazySeq)
+            else list(constraint_names or [])
         )
+        self.holonomic = holonomic if holonomic is not None else []
+        self.parameters: tuple = tuple(parameters or ())
         self.extra = extra or {}
+
+    @cached_property
+    def speeds(self) -> tuple | LazySeq:
+        """q̇, in coordinate order."""
+        return _mapped(self.coordinates, speed)
+
+    @cached_property
+    def accels(self) -> tuple | LazySeq:
+        """q̈, in coordinate order."""
+        return _mapped(self.coordinates, accel)
+
+    @cached_property
+    def multipliers(self) -> tuple | LazySeq:
+        """λ_1 … λ_m, one per constraint row."""
+        return _mapped(range(self.m), lambda i: sp.Symbol(f"lambda{i + 1}"))
 
     @property
     def n(self) -> int:
@@ -132,11 +155,24 @@ class EquationsOfMotion:
     @property
     def m(self) -> int:
         """Number of constraints (multipliers)."""
-        return len(self.multipliers)
+        return len(self.constraint_names)
+
+    @property
+    def family(self) -> bool:
+        """True when some block is a family template (compiled to a structured model)."""
+        return any(getattr(b, "family", False) for b in self.blocks)
+
+    def _check_symbolic_size(self) -> None:
+        if self.n > SYMBOLIC_LIMIT:
+            raise PfaffError(
+                f"symbolic matrices of {self.n} coordinates are too large to build (limit "
+                f"{SYMBOLIC_LIMIT}); the templates are derived: use .compile(parameters) for numbers"
+            )
 
     # ------------------------------------------------------------------ assembly
     def _instances(self, kind: str):
         """Yield (block, instance index, coordinate indices, local -> global rule) per instance."""
+        self._check_symbolic_size()
         for block in self.blocks:
             if block.local.kind != kind:
                 continue
@@ -323,8 +359,6 @@ class EquationsOfMotion:
         >>> s.equations().solve()[x.diff(pfaff.t, 2)]
         3
         """
-        from .errors import PfaffError
-
         n, m = self.n, self.m
         if n + m > SOLVE_LIMIT:
             raise PfaffError(
@@ -361,6 +395,10 @@ class EquationsOfMotion:
         parameters : dict
             Value for every symbol in :attr:`parameters`, keyed by Symbol or by name.
         """
+        if self.family:
+            from .structured import compile_structured
+
+            return compile_structured(self, parameters or {})
         from .compiler import compile_equations
 
         return compile_equations(self, parameters or {})

@@ -12,11 +12,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.physics.vector import Vector
 
 from .errors import ConstraintError, ModelError, ModelTypeError
+from .family import Family, LazySeq, Ref, check_name, concat, find_ref, index_range, member_index
 from .symbols import as_expr, is_coordinate_like, local_q, local_qd, speed, t, validate_coordinates
 
 if TYPE_CHECKING:
@@ -45,6 +47,9 @@ class Piece:
         Hashable local form: ``(kind, dim, local expressions...)``. Equal keys mean equal derivations.
     name : str
         A label for reports.
+    template : Template or None
+        For a family piece (``over=k``): the index range and, per local coordinate, a global
+        index or a family reference.
     """
 
     kind: str
@@ -53,6 +58,38 @@ class Piece:
     key: tuple
     name: str
     dim: int = 0
+    template: Template | None = None
+
+    @property
+    def count(self) -> int:
+        """Number of instances (1 for an ordinary piece)."""
+        return 1 if self.template is None else self.template.count
+
+
+@dataclass(frozen=True)
+class Template:
+    """Instances k = lo … hi of a family piece; ``slots[a]`` is local coordinate a."""
+
+    index: sp.Symbol
+    lo: int
+    hi: int
+    slots: tuple[int | Ref, ...]
+
+    @property
+    def count(self) -> int:
+        """Number of instances."""
+        return self.hi - self.lo + 1
+
+    def progression(self, a: int) -> tuple[int, int]:
+        """(start, step) of local coordinate a's global index over the instances."""
+        s = self.slots[a]
+        return (s, 0) if isinstance(s, int) else (s.column(self.lo), s.stride)
+
+
+def _slot_name(system: System, slot: int | Ref) -> str:
+    if isinstance(slot, int):
+        return str(speed(system._coord(slot)))
+    return f"Derivative({slot.family.name}[{slot.stride}*{slot.index} + {slot.shift}], t)"
 
 
 class System:
@@ -67,8 +104,9 @@ class System:
 
     Parameters
     ----------
-    coordinates : sequence of Function
-        Generalized coordinates q (n of them), each a function of :data:`pfaff.t`.
+    coordinates : sequence of Function, optional
+        Generalized coordinates q, each a function of :data:`pfaff.t`. Omit it when every
+        coordinate comes from :meth:`add_family`.
     name : str, optional
     frame : sympy.physics.vector.ReferenceFrame, optional
         Inertial frame in which positions and forces given as ``Vector`` are resolved.
@@ -87,23 +125,84 @@ class System:
     Matrix([[2*x(t), 2*y(t)]])
     """
 
-    def __init__(self, coordinates: object, *, name: str = "system", frame: object = None) -> None:
+    def __init__(
+        self, coordinates: object = None, *, name: str = "system", frame: object = None
+    ) -> None:
         self.frame = frame
-        self.coordinates: tuple[sp.Function, ...] = validate_coordinates(coordinates)
-        self.speeds: tuple[sp.Expr, ...] = tuple(speed(q) for q in self.coordinates)
+        self._ordinary: tuple = () if coordinates is None else validate_coordinates(coordinates)
+        self.families: list[Family] = []
         self.name = name
-        self._index = {q: i for i, q in enumerate(self.coordinates)}
-        self._speed_index = {qd: i for i, qd in enumerate(self.speeds)}
+        self._index = {q: i for i, q in enumerate(self._ordinary)}
+        self._speed_index = {speed(q): i for i, q in enumerate(self._ordinary)}
         self.pieces: list[Piece] = []
         self._parameters: set[sp.Symbol] = set()
         self._constraint_keys: dict[tuple, str] = {}
         self._counts: dict[str, int] = dict.fromkeys(PIECE_KINDS, 0)
+        self._pending_refs: dict = {}
 
     # ------------------------------------------------------------------ inspection helpers
     @property
+    def coordinates(self) -> tuple | LazySeq:
+        """All coordinates: the ordinary ones, then each family's members (made on demand)."""
+        if not self.families:
+            return self._ordinary
+        return concat([self._ordinary, *(f.coordinates for f in self.families)])
+
+    @property
+    def speeds(self) -> tuple | LazySeq:
+        """q̇ of every coordinate, in coordinate order."""
+        qs = self.coordinates
+        return (
+            tuple(map(speed, qs))
+            if isinstance(qs, tuple)
+            else LazySeq(len(qs), lambda i: speed(qs[i]))
+        )
+
+    @property
     def n(self) -> int:
         """Number of generalized coordinates."""
-        return len(self.coordinates)
+        return len(self._ordinary) + sum(f.n for f in self.families)
+
+    def add_family(self, name: str, n: int, *, first: int = 0) -> Family:
+        """Append an indexed family of n coordinates ``name{first}`` … ``name{first+n-1}``.
+
+        Parameters
+        ----------
+        name : str
+            Base name; member i is the coordinate ``name{i}`` (e.g. ``theta5``).
+        n : int
+            Number of members.
+        first : int, optional
+            Index of the first member (default 0).
+
+        Returns
+        -------
+        Family
+            ``fam[i]`` is member i; ``fam[k + c]`` (k a SymPy symbol) is a template reference for
+            pieces added with ``over=k`` or ``over=(k, first, last)``.
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> s = pfaff.System()
+        >>> th = s.add_family("theta", 3)
+        >>> k = sp.Symbol("k")
+        >>> s.add_particle(1, [sp.cos(th[k]), sp.sin(th[k])], over=k)
+        >>> s.equations().mass_matrix
+        Matrix([
+        [1, 0, 0],
+        [0, 1, 0],
+        [0, 0, 1]])
+        """
+        taken = [str(q.func) for q in self._ordinary] + [f.name for f in self.families]
+        name, n = check_name(name, n, first, taken)
+        fam = Family(name, n, int(first), self.n)
+        self.families.append(fam)
+        return fam
+
+    def _resolve(self, f: AppliedUndef) -> int | None:
+        i = self._index.get(f)
+        return member_index(self.families, f) if i is None and self.families else i
 
     @property
     def parameters(self) -> tuple[sp.Symbol, ...]:
@@ -120,22 +219,53 @@ class System:
         """Number of constraints m."""
         return self._counts["holonomic"] + self._counts["velocity"]
 
-    def _scan(self, exprs: tuple[sp.Expr, ...], what: str, *, speeds: bool) -> tuple[int, ...]:
-        """Indices of the coordinates the expressions involve; reject foreign functions of time."""
+    def constraint_rows(self) -> tuple[tuple | LazySeq, np.ndarray]:
+        """Name and holonomic flag of every constraint row (a family piece has one per k)."""
+        names, flags = [], []
+        for p in self.constraints:
+            if p.template is None:
+                names.append((p.name,))
+            else:
+                lo, label = p.template.lo, p.name
+                names.append(LazySeq(p.count, lambda j, lo=lo, label=label: f"{label} {lo + j}"))
+            flags.append(np.full(p.count, p.kind == "holonomic"))
+        hol = np.concatenate(flags) if flags else np.zeros(0, dtype=bool)
+        return concat(names), hol
+
+    def _scan(
+        self,
+        exprs: tuple[sp.Expr, ...],
+        what: str,
+        *,
+        speeds: bool,
+        refs: dict | None = None,
+    ) -> tuple[int, ...]:
+        """Indices of the coordinates the expressions involve; reject foreign functions of time.
+
+        Family references (``theta[k]``) are collected into ``refs`` (function -> Ref) when given.
+        """
         used: set[int] = set()
         problems: list[str] = []
         for e in exprs:
             atoms = e.atoms(sp.Derivative, AppliedUndef, sp.Symbol)
             derivs = [a for a in atoms if isinstance(a, sp.Derivative)]
             for d in derivs:
-                if d in self._speed_index:
+                j = self._speed_index.get(d)
+                if j is None and is_coordinate_like(d.expr) and d.args[1:] == ((t, 1),):
+                    j = self._resolve(d.expr)
+                    if j is None and (ref := self._ref(d.expr, refs, problems)) is not None:
+                        j = ref
+                if j is not None:
                     if not speeds:
                         problems.append(
                             f"contains the velocity {d}; positions and holonomic constraints "
                             "may depend on q and t only"
                         )
-                    used.add(self._speed_index[d])
-                elif is_coordinate_like(d.expr) and d.expr in self._index:
+                    if isinstance(j, int):
+                        used.add(j)
+                elif is_coordinate_like(d.expr) and (
+                    self._resolve(d.expr) is not None or find_ref(self.families, d.expr)
+                ):
                     problems.append(f"contains the higher derivative {d}, which is not allowed")
                 else:
                     problems.append(
@@ -146,8 +276,10 @@ class System:
                     if f != t:
                         self._parameters.add(f)
                 elif isinstance(f, AppliedUndef):
-                    if f in self._index:
-                        used.add(self._index[f])
+                    if (j := self._resolve(f)) is not None:
+                        used.add(j)
+                    elif self._ref(f, refs, problems) is not None:
+                        pass
                     elif not any(f in d.atoms(AppliedUndef) for d in derivs):
                         problems.append(
                             f"depends on `{f}`, which is not a coordinate of this system "
@@ -157,12 +289,56 @@ class System:
             raise ModelError(f"{what}: " + "; ".join(dict.fromkeys(problems)))
         return tuple(sorted(used))
 
-    def _localize(self, exprs: tuple[sp.Expr, ...], coords: tuple[int, ...]) -> tuple[sp.Expr, ...]:
+    def _ref(self, f: AppliedUndef, refs: dict | None, problems: list[str]) -> Ref | None:
+        ref = find_ref(self.families, f) if self.families else None
+        if ref is not None:
+            if refs is None:
+                problems.append(
+                    f"uses the family reference {f.func.__name__}: pass `over={ref.index}` "
+                    f"(or over=({ref.index}, first, last)) to instantiate it"
+                )
+            else:
+                refs[f] = ref
+        return ref
+
+    def _coord(self, i: int) -> sp.Expr:
+        """Coordinate i (O(1), without building the whole coordinate list)."""
+        if i < len(self._ordinary):
+            return self._ordinary[i]
+        fam = next(f for f in self.families if f.offset <= i < f.offset + f.n)
+        return fam.member(fam.first + i - fam.offset)
+
+    def _localize(
+        self, exprs: tuple[sp.Expr, ...], coords: tuple[int, ...], over: object = None, what=""
+    ) -> tuple[tuple[sp.Expr, ...], Template | None]:
+        """Local form of ``exprs``; for a family piece (``over``) also its :class:`Template`."""
+        refs = self._pending_refs
+        self._pending_refs = {}
+        slots: list = list(coords)
+        if over is not None:
+            k, lo, hi = index_range(list(refs.values()), over, what)
+            slots += list(refs.values())
+            slots.sort(key=lambda s: s if isinstance(s, int) else s.column(lo))
+        by_ref = {r: f for f, r in refs.items()}
         rule: dict[sp.Basic, sp.Basic] = {}
-        for a, i in enumerate(coords):
-            rule[self.speeds[i]] = local_qd(a)
-            rule[self.coordinates[i]] = local_q(a)
-        return tuple(e.xreplace(rule) for e in exprs)
+        for a, s_ in enumerate(slots):
+            q = self._coord(s_) if isinstance(s_, int) else by_ref[s_]
+            rule[speed(q)] = local_qd(a)
+            rule[q] = local_q(a)
+        local = tuple(e.xreplace(rule) for e in exprs)
+        if over is None:
+            return local, None
+        if any(e.has(k) for e in local):
+            raise ModelError(
+                f"{what}: the index {k} appears outside a family reference; templates may "
+                "use it only inside references such as theta[k + 1]"
+            )
+        return local, Template(k, lo, hi, tuple(slots))
+
+    def _refs(self, over: object) -> dict | None:
+        """Start collecting family references for a piece added with ``over``."""
+        self._pending_refs = {}
+        return self._pending_refs if over is not None else None
 
     def _add(
         self,
@@ -171,12 +347,15 @@ class System:
         coords: tuple[int, ...],
         name: str,
         dim: int = 0,
-        local: tuple[sp.Expr, ...] | None = None,
+        over: object = None,
+        local: tuple | None = None,
+        template: Template | None = None,
     ) -> Piece:
-        local = self._localize(exprs, coords) if local is None else local
-        piece = Piece(kind, exprs, coords, (kind, dim, *local), name, dim)
+        if local is None:
+            local, template = self._localize(exprs, coords, over, f"{kind} `{name}`")
+        piece = Piece(kind, exprs, coords, (kind, dim, *local), name, dim, template)
         self.pieces.append(piece)
-        self._counts[kind] += 1
+        self._counts[kind] += piece.count
         return piece
 
     def _vector(self, value: object, what: str, frame: object) -> tuple[sp.Expr, ...]:
@@ -221,7 +400,13 @@ class System:
 
     # ------------------------------------------------------------------ building the model
     def add_particle(
-        self, mass: object, position: object, *, name: str | None = None, frame: object = None
+        self,
+        mass: object,
+        position: object,
+        *,
+        name: str | None = None,
+        frame: object = None,
+        over: object = None,
     ) -> None:
         """Add a point mass at ``position`` (inertial components, functions of q and t).
 
@@ -235,6 +420,9 @@ class System:
             Label used in reports.
         frame : ReferenceFrame, optional
             Inertial frame in which to take a Vector's components.
+        over : Symbol or tuple, optional
+            Make this a family template: ``k`` (every k of the family indexed as ``fam[k]``) or
+            ``(k, first, last)`` (inclusive, as in :class:`sympy.Sum`); see :meth:`add_family`.
 
         Examples
         --------
@@ -252,10 +440,13 @@ class System:
             raise ModelError(f"mass of particle `{label}` must be constant, got {m}")
         if m.is_number and not m.is_positive:
             raise ModelError(f"mass of particle `{label}` must be positive, got {m}")
-        coords = self._scan(r, f"position of particle `{label}`", speeds=False)
-        self._add("particle", (m, *r), coords, label, len(r))
+        refs = self._refs(over)
+        coords = self._scan(r, f"position of particle `{label}`", speeds=False, refs=refs)
+        self._add("particle", (m, *r), coords, label, len(r), over)
 
-    def add_kinetic_energy(self, expr: object, *, name: str | None = None) -> None:
+    def add_kinetic_energy(
+        self, expr: object, *, name: str | None = None, over: object = None
+    ) -> None:
         """Add a kinetic energy term T(q, q̇, t) (e.g. ``I*theta.diff(t)**2/2``).
 
         Examples
@@ -268,12 +459,15 @@ class System:
         """
         label = self._label(name, "kinetic")
         e = as_expr(expr, f"kinetic energy `{label}`")
-        coords = self._scan((e,), f"kinetic energy `{label}`", speeds=True)
-        if not coords:
+        refs = self._refs(over)
+        coords = self._scan((e,), f"kinetic energy `{label}`", speeds=True, refs=refs)
+        if not coords and not refs:
             raise ModelError(f"kinetic energy `{label}` involves no coordinate: {e}")
-        self._add("kinetic", (e,), coords, label)
+        self._add("kinetic", (e,), coords, label, over=over)
 
-    def add_potential_energy(self, expr: object, *, name: str | None = None) -> None:
+    def add_potential_energy(
+        self, expr: object, *, name: str | None = None, over: object = None
+    ) -> None:
         """Add a potential energy term V(q, t); the Lagrangian is L = T - V.
 
         Examples
@@ -286,12 +480,19 @@ class System:
         """
         label = self._label(name, "potential")
         e = as_expr(expr, f"potential energy `{label}`")
-        coords = self._scan((e,), f"potential energy `{label}`", speeds=False)
-        if coords:
-            self._add("potential", (e,), coords, label)
+        refs = self._refs(over)
+        coords = self._scan((e,), f"potential energy `{label}`", speeds=False, refs=refs)
+        if coords or refs:
+            self._add("potential", (e,), coords, label, over=over)
 
     def add_force(
-        self, force: object, at: object, *, name: str | None = None, frame: object = None
+        self,
+        force: object,
+        at: object,
+        *,
+        name: str | None = None,
+        frame: object = None,
+        over: object = None,
     ) -> None:
         """Add a force applied at the point with position ``at``.
 
@@ -317,10 +518,11 @@ class System:
         r = self._vector(at, f"point of force `{label}`", frame)
         if len(f) != len(r):
             raise ModelError(f"force `{label}` has {len(f)} components but its point has {len(r)}")
-        cf = self._scan(f, f"force `{label}`", speeds=True)
-        cr = self._scan(r, f"point of force `{label}`", speeds=False)
+        refs = self._refs(over)
+        cf = self._scan(f, f"force `{label}`", speeds=True, refs=refs)
+        cr = self._scan(r, f"point of force `{label}`", speeds=False, refs=refs)
         coords = tuple(sorted(set(cf) | set(cr)))
-        self._add("force", (*f, *r), coords, label, len(f))
+        self._add("force", (*f, *r), coords, label, len(f), over)
 
     def add_generalized_force(
         self, coordinate: object, expr: object, *, name: str | None = None
@@ -346,7 +548,9 @@ class System:
         )
         self._add("genforce", (e,), coords, label, coords.index(j))
 
-    def add_holonomic_constraint(self, expr: object, name: str | None = None) -> None:
+    def add_holonomic_constraint(
+        self, expr: object, name: str | None = None, *, over: object = None
+    ) -> None:
         """Add a holonomic constraint f(q, t) = 0; it enters as A = ∂f/∂q, b = ∂f/∂t.
 
         Examples
@@ -361,12 +565,16 @@ class System:
         if isinstance(expr, sp.Equality):
             expr = expr.lhs - expr.rhs
         e = as_expr(expr, f"constraint `{label}`")
-        coords = self._scan((e,), f"holonomic constraint `{label}`", speeds=False)
-        local = self._localize((e,), coords)
-        self._check_new_constraint(e, local, coords, label)
-        self._add("holonomic", (e,), coords, label, local=local)
+        what = f"holonomic constraint `{label}`"
+        refs = self._refs(over)
+        coords = self._scan((e,), what, speeds=False, refs=refs)
+        local, tmpl = self._localize((e,), coords, over, what)
+        self._check_new_constraint(e, local, coords, label, tmpl)
+        self._add("holonomic", (e,), coords, label, local=local, template=tmpl)
 
-    def add_velocity_constraint(self, expr: object, name: str | None = None) -> None:
+    def add_velocity_constraint(
+        self, expr: object, name: str | None = None, *, over: object = None
+    ) -> None:
         """Add a Pfaffian velocity constraint A(q,t) q̇ + b(q,t) = 0 (linear in q̇).
 
         Examples
@@ -380,9 +588,12 @@ class System:
         """
         label = self._label(name, "constraint")
         e = as_expr(expr, f"constraint `{label}`")
-        coords = self._scan((e,), f"velocity constraint `{label}`", speeds=True)
-        (local,) = self._localize((e,), coords)
-        uds = [local_qd(a) for a in range(len(coords))]
+        what = f"velocity constraint `{label}`"
+        refs = self._refs(over)
+        coords = self._scan((e,), what, speeds=True, refs=refs)
+        (local,), tmpl = self._localize((e,), coords, over, what)
+        slots = coords if tmpl is None else tmpl.slots
+        uds = [local_qd(a) for a in range(len(slots))]
         present = [u for u in uds if local.has(u)]
         if not present:
             raise ConstraintError(
@@ -390,27 +601,33 @@ class System:
                 "is holonomic: use add_holonomic_constraint"
             )
         nonlinear = [
-            str(self.speeds[coords[uds.index(u)]]) for u in present if local.diff(u).has(*uds)
+            str(_slot_name(self, slots[uds.index(u)])) for u in present if local.diff(u).has(*uds)
         ]
         if nonlinear:
             raise ConstraintError(
                 f"velocity constraint `{label}` is not Pfaffian: it is not linear in the "
                 f"velocities ({', '.join(nonlinear)}); write it as A(q,t)·q̇ + b(q,t) = 0"
             )
-        self._check_new_constraint(e, (local,), coords, label)
-        self._add("velocity", (e,), coords, label, local=(local,))
+        self._check_new_constraint(e, (local,), coords, label, tmpl)
+        self._add("velocity", (e,), coords, label, local=(local,), template=tmpl)
 
     def _check_new_constraint(
-        self, e: sp.Expr, local: tuple[sp.Expr, ...], coords: tuple[int, ...], label: str
+        self,
+        e: sp.Expr,
+        local: tuple[sp.Expr, ...],
+        coords: tuple[int, ...],
+        label: str,
+        tmpl: Template | None = None,
     ) -> None:
-        if not coords:
+        if not coords and tmpl is None:
             raise ConstraintError(f"constraint `{label}` names no coordinate: {e} = 0")
-        if self.n_constraints + 1 > self.n:
+        count = 1 if tmpl is None else tmpl.count
+        if self.n_constraints + count > self.n:
             raise ConstraintError(
-                f"constraint `{label}` would make {self.n_constraints + 1} constraints on "
+                f"constraint `{label}` would make {self.n_constraints + count} constraints on "
                 f"{self.n} coordinates: more independent constraints than coordinates is impossible"
             )
-        key = (*local, coords)
+        key = (*local, coords if tmpl is None else tmpl)
         if key in self._constraint_keys:
             raise ConstraintError(
                 f"constraint `{label}` repeats constraint `{self._constraint_keys[key]}`: "

@@ -1,0 +1,241 @@
+"""KKT solvers of :class:`pfaff.structured.StructuredModel`, chosen once from the structure.
+
+Measured on the 2-core development machine for the rolling ring (``benchmarks/ring_scale.py``):
+at N = 2^20 SuperLU on the assembled augmented matrix takes about 2 s per solve (and 16 GB-class
+fill-in budgets beyond), LAPACK's tridiagonal Cholesky of the Schur complement A M⁻¹ Aᵀ about
+0.03 s, and the triangular null-space elimination below about 0.02 s, all of it streaming. The
+triangular path needs neither a factorization nor an inverse of M, so it is the fast path; SuperLU
+with a reused fill-reducing ordering is the general fallback. CHOLMOD (scikit-sparse) and qdldl
+would need a compiled dependency for a path that is not the fast one, so they are not used.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+from .banded import LowerBand
+from .errors import ConstraintError
+from .streams import Index, indices, scatter_add
+
+P_MAX = 32  # ordinary coordinates for the dense projected system
+W_MAX = 8  # bandwidth of the triangular constraint structure
+
+
+@dataclass
+class TriangularPlan:
+    """Where each constraint entry goes: the band of A_L (offset) or a column of A_G."""
+
+    p: int
+    w: int
+    band: list = field(default_factory=list)  # (block, entry, offset, rows Index)
+    border: list = field(default_factory=list)  # (block, entry, g, rows Index)
+
+
+def triangular_plan(model) -> TriangularPlan | None:
+    """The triangular structure of A, or None when A_L is not square banded lower triangular."""
+    p, m = model.p, model.m
+    if m == 0 or m != model.n - p or p > P_MAX:
+        return None
+    plan = TriangularPlan(p, 0)
+    diag = np.zeros(m, dtype=bool)
+    for bi, part in enumerate(model._con):
+        rows = part.rows
+        if not isinstance(rows, Index) or (rows.step != 1 and rows.count > 1):
+            return None
+        for ei, c in enumerate(part.cols):
+            if not isinstance(c, Index):
+                return None
+            if c.fixed or c.count == 1:
+                if c.start < p:
+                    plan.border.append((bi, ei, c.start, rows))
+                    continue
+                if c.fixed:
+                    return None
+            if c.start < p or (c.count > 1 and c.step != 1):
+                return None
+            off = rows.start - (c.start - p)
+            if not 0 <= off <= W_MAX:
+                return None
+            plan.band.append((bi, ei, off, rows))
+            plan.w = max(plan.w, off)
+            if off == 0:
+                diag[rows.slice()] = True
+    return plan if diag.all() else None
+
+
+class TriangularSolver:
+    """Null-space elimination through the triangular A_L (see :mod:`pfaff.structured`)."""
+
+    name = "triangular"
+
+    def __init__(self, model, plan: TriangularPlan) -> None:
+        self.model, self.plan = model, plan
+        m, p = model.m, plan.p
+        self.R0 = np.zeros((plan.w + 1, m))
+        self.G0 = np.zeros((p, m))
+        self.var_band, self.var_border = [], []
+        for bi, ei, off, rows in plan.band:
+            val = model._con[bi].acc.const[ei]
+            if val is None:
+                self.var_band.append((bi, ei, off, rows))
+            else:
+                scatter_add(self.R0[off], rows, val)
+        for bi, ei, g, rows in plan.border:
+            val = model._con[bi].acc.const[ei]
+            if val is None:
+                self.var_border.append((bi, ei, g, rows))
+            else:
+                scatter_add(self.G0[g], rows, val)
+        self.band = None if self.var_band else LowerBand(self.R0, constant=True)
+        self.Z = None
+        if self.band is not None:
+            self.band.check()
+            if not self.var_border:
+                self.Z = self._z(self.band, self.G0)
+
+    def _z(self, band: LowerBand, G: np.ndarray) -> np.ndarray:
+        """Z = A_L⁻¹ A_G, stored as rows (p, m)."""
+        return np.ascontiguousarray(band.solve(G.T).T) if G.size else G
+
+    def _current(self, avals: list) -> tuple[LowerBand, np.ndarray]:
+        band, Z = self.band, self.Z
+        if band is None:
+            R = self.R0.copy()
+            for bi, ei, off, rows in self.var_band:
+                scatter_add(R[off], rows, avals[bi][ei])
+            band = LowerBand(R, constant=False)
+            band.check()
+        if Z is None:
+            G = self.G0.copy()
+            for bi, ei, g, rows in self.var_border:
+                scatter_add(G[g], rows, avals[bi][ei])
+            Z = self._z(band, G)
+        return band, Z
+
+    def solve(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
+        model, p = self.model, self.plan.p
+        band, Z = self._current(avals)
+        w = band.solve(c) if c is not None else None
+        Mw = model.matvec(mvals, np.concatenate([np.zeros(p), w])) if w is not None else None
+        r0 = f if Mw is None else f - Mw  # f - M[0; w]
+        MT = []
+        for g in range(p):
+            v = np.empty(model.n)
+            v[:p] = 0.0
+            v[g] = 1.0
+            np.negative(Z[g], out=v[p:])
+            MT.append(model.matvec(mvals, v))
+        Mr = np.array([[MT[g][h] - Z[h] @ MT[g][p:] for g in range(p)] for h in range(p)])
+        rr = np.array([r0[h] - Z[h] @ r0[p:] for h in range(p)])
+        try:
+            qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
+        except np.linalg.LinAlgError as e:
+            raise ConstraintError(
+                "the projected mass matrix TᵀMT is singular: a coordinate without inertia on "
+                "the admissible motions"
+            ) from e
+        qdd = np.empty(model.n)
+        qdd[:p] = qG
+        qL = qdd[p:]
+        qL[:] = 0.0 if w is None else w
+        for g in range(p):
+            qL -= qG[g] * Z[g]
+        res = -r0  # M q̈ - f = M[0; w] + Σ_g MT_g qG_g - f
+        for g in range(p):
+            res += qG[g] * MT[g]
+        lam = band.solve_t(res[p:])
+        return qdd, lam
+
+
+class SparseSolver:
+    """SuperLU on the assembled augmented matrix, its column ordering reused across solves."""
+
+    name = "sparse"
+
+    def __init__(self, model) -> None:
+        self.model = model
+        n, m = model.n, model.m
+        N = n + m
+        rows, cols = [], []
+        for part in model._dyn:
+            for r, c in part.mass:
+                rows.append(_expand(r, c))
+                cols.append(_expand(c, r))
+        for part in model._con:
+            for c in part.cols:
+                rr = n + _expand(part.rows, c)
+                cc = _expand(c, part.rows)
+                rows += [rr, cc]
+                cols += [cc, rr]
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, np.int64)  # noqa: E731
+        lin = cat(cols) * N + cat(rows)
+        self.uniq, self.slot = np.unique(lin, return_inverse=True)
+        self.N = N
+        self.perm: np.ndarray | None = None
+        self._pattern(None)
+
+    def _pattern(self, perm: np.ndarray | None) -> None:
+        """CSC structure of K (or of K[:, perm]) and where each stored entry goes."""
+        N = self.N
+        col, row = self.uniq // N, self.uniq % N
+        if perm is not None:
+            inv = np.empty(N, dtype=np.int64)
+            inv[perm] = np.arange(N)
+            col = inv[col]
+        order = np.lexsort((row, col))
+        self.where = np.empty_like(order)
+        self.where[order] = np.arange(order.size)
+        self.indices = row[order]
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(col, minlength=N))])
+
+    def solve(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
+        model = self.model
+        data = []
+        for part, vals in zip(model._dyn, mvals, strict=True):
+            for (r, cc), v in zip(part.mass, vals, strict=True):
+                data.append(np.broadcast_to(np.asarray(v, float), (_count(r, cc),)))
+        for part, vals in zip(model._con, avals, strict=True):
+            for cc, v in zip(part.cols, vals, strict=True):
+                d = np.broadcast_to(np.asarray(v, float), (_count(part.rows, cc),))
+                data += [d, d]
+        vals = np.bincount(self.slot, weights=np.concatenate(data), minlength=self.uniq.size)
+        packed = np.empty_like(vals)
+        packed[self.where] = vals
+        K = sps.csc_matrix((packed, self.indices, self.indptr), shape=(self.N, self.N))
+        rhs = np.concatenate([f, np.zeros(model.m) if c is None else c])
+        try:
+            if self.perm is None:
+                lu = spla.splu(K, permc_spec="COLAMD")
+                self.perm = lu.perm_c.copy()
+                self._pattern(self.perm)
+                sol = lu.solve(rhs)
+            else:
+                y = spla.splu(K, permc_spec="NATURAL").solve(rhs)
+                sol = np.empty_like(y)
+                sol[self.perm] = y
+        except RuntimeError as e:
+            raise ConstraintError(
+                "the augmented matrix [[M, Aᵀ], [A, 0]] is singular: redundant or inconsistent "
+                "constraints, or a coordinate without inertia"
+            ) from e
+        if not np.all(np.isfinite(sol)):
+            raise ConstraintError("the augmented matrix [[M, Aᵀ], [A, 0]] is singular")
+        return sol[: model.n], -sol[model.n :]
+
+
+def _count(a, b) -> int:
+    return max(
+        np.size(indices(a)) if not isinstance(a, Index) else a.count,
+        np.size(indices(b)) if not isinstance(b, Index) else b.count,
+    )
+
+
+def _expand(a, b) -> np.ndarray:
+    """Indices of ``a`` over the instances of a stream whose other index set is ``b``."""
+    return np.broadcast_to(indices(a), (_count(a, b),)).astype(np.int64)

@@ -1,0 +1,167 @@
+"""Template kernels evaluated over index progressions, without per-instance index arrays.
+
+A family block's instance i uses global coordinate ``start + step*i`` for each local coordinate, so
+the kernel's inputs are strided *views* of q and q̇ (no gather) and its outputs scatter back with
+slice arithmetic. Outputs that do not depend on the state are evaluated once, at build time, to a
+number. Evaluation runs in chunks of instances so that the temporaries of the generated NumPy code
+stay in cache.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+
+from .symbols import local_q, local_qd, t
+
+CHUNK = 1 << 15  # instances per kernel call
+
+
+@dataclass(frozen=True)
+class Index:
+    """Global indices ``start + step*i`` for i < count (``step == 0``: one fixed index).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ix = Index(1, 2, 3)
+    >>> ix.take(np.arange(10.0)).tolist(), ix.indices().tolist()
+    ([1.0, 3.0, 5.0], [1, 3, 5])
+    """
+
+    start: int
+    step: int
+    count: int
+
+    @classmethod
+    def of(cls, idx: np.ndarray) -> Index | np.ndarray:
+        """The progression an index array is, or the array itself when it is none."""
+        idx = np.asarray(idx, dtype=np.int64)
+        if idx.size == 1:
+            return cls(int(idx[0]), 1, 1)
+        d = np.diff(idx)
+        if d.size and np.all(d == d[0]):
+            return cls(int(idx[0]), int(d[0]), idx.size)
+        return idx
+
+    @property
+    def fixed(self) -> bool:
+        """All instances use the same index."""
+        return self.step == 0
+
+    def slice(self, lo: int = 0, hi: int | None = None) -> slice:
+        """The slice of instances lo … hi-1 (not for fixed indices)."""
+        hi = self.count if hi is None else hi
+        a = self.start + self.step * lo
+        b = self.start + self.step * (hi - 1) + (1 if self.step > 0 else -1)
+        return slice(a, b if b >= 0 else None, self.step)
+
+    def take(self, x: np.ndarray, lo: int = 0, hi: int | None = None) -> np.ndarray | float:
+        """x at the indices of instances lo … hi-1: a view, or a scalar when fixed."""
+        return x[self.start] if self.fixed else x[self.slice(lo, hi)]
+
+    def indices(self) -> np.ndarray:
+        """The indices as an array, shape (count,)."""
+        return self.start + self.step * np.arange(self.count, dtype=np.int64)
+
+
+def take(ix: Index | np.ndarray, x: np.ndarray, lo: int = 0, hi: int | None = None):
+    """x at an index set (view, scalar or gather)."""
+    return ix.take(x, lo, hi) if isinstance(ix, Index) else x[ix[lo:hi]]
+
+
+def scatter_add(out: np.ndarray, ix: Index | np.ndarray, vals: np.ndarray | float) -> None:
+    """out[ix] += vals, summing over instances that share an index."""
+    if isinstance(ix, Index):
+        if ix.fixed:
+            out[ix.start] += np.sum(vals) if np.ndim(vals) else vals * ix.count
+        else:
+            out[ix.slice()] += vals
+    else:
+        np.add.at(out, ix, np.broadcast_to(vals, ix.shape))
+
+
+def indices(ix: Index | np.ndarray) -> np.ndarray:
+    """An index set as an array."""
+    return ix.indices() if isinstance(ix, Index) else ix
+
+
+def dot(vals: np.ndarray | float, x: np.ndarray | float) -> float:
+    """Σ_i vals_i x_i, with scalars standing for constant arrays."""
+    if np.ndim(vals) and np.ndim(x):
+        return float(np.dot(vals, x))
+    return float(np.sum(np.multiply(vals, x)))
+
+
+class StreamKernel:
+    """Outputs of one template over all its instances; constants folded at build time.
+
+    Parameters
+    ----------
+    columns : list of Index or ndarray
+        Global coordinate indices of each local coordinate over the instances.
+    exprs : list of Expr
+        Outputs in local placeholders ``_q0, _qd0, …``, t and parameters.
+    params : sequence of Symbol
+    values : sequence of float
+        Parameter values.
+
+    Attributes
+    ----------
+    const : list of float or None
+        Per output: its value when it does not depend on the state, else None.
+    """
+
+    def __init__(
+        self,
+        columns: list,
+        exprs: Sequence[sp.Expr],
+        params: Sequence[sp.Symbol],
+        values: Sequence[float],
+        count: int,
+    ) -> None:
+        self.columns, self.count = columns, count
+        k = len(columns)
+        state = {local_q(a) for a in range(k)} | {local_qd(a) for a in range(k)} | {t}
+        subs = dict(zip(params, values, strict=True))
+        self.const: list[float | None] = []
+        varying = []
+        for e in exprs:
+            e = sp.sympify(e)
+            if e.free_symbols & state:
+                self.const.append(None)
+                varying.append(e.xreplace(subs))
+            else:
+                self.const.append(float(e.xreplace(subs)))
+        args = [local_q(a) for a in range(k)] + [local_qd(a) for a in range(k)] + [t]
+        self.varying = [i for i, c in enumerate(self.const) if c is None]
+        self._fn = (
+            sp.lambdify(args, varying, modules="numpy", cse=True, docstring_limit=0)
+            if varying
+            else None
+        )
+        self._out: np.ndarray | None = None
+
+    def __call__(self, t_: float, q: np.ndarray, qd: np.ndarray) -> list:
+        """Every output over the instances: a float (constant) or an array, shape (count,).
+
+        The arrays are buffers owned by the kernel, overwritten by the next call.
+        """
+        if self._fn is None:
+            return list(self.const)
+        if self._out is None:
+            self._out = np.empty((len(self.varying), self.count))
+        out = self._out
+        for lo in range(0, self.count, CHUNK):
+            hi = min(lo + CHUNK, self.count)
+            args = [take(c, q, lo, hi) for c in self.columns]
+            args += [take(c, qd, lo, hi) for c in self.columns]
+            for j, r in enumerate(self._fn(*args, t_)):
+                out[j, lo:hi] = r
+        res = list(self.const)
+        for j, i in enumerate(self.varying):
+            res[i] = out[j]
+        return res

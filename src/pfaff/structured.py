@@ -1,0 +1,315 @@
+"""The numeric model of a system with families: template kernels over index progressions, O(N) solves.
+
+Same contract as :class:`pfaff.NumericModel` (``accelerations``, ``constraint_residual``,
+``constraint_matrix``, ``mass_matrix``, ``forcing``, ``energy``, ``project``). M and A are never
+assembled for a solve: each template contributes *streams* of entries (a value per instance at
+global row ``start + step*i`` and column ``start' + step'*i``), applied with slice arithmetic.
+
+Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.solvers`):
+
+``triangular``
+    The constraint Jacobian restricted to the family coordinates, A_L, is square and banded lower
+    triangular (the ring: no slip on θ_1, then θ_{k+1} - θ_k). Null-space elimination: the
+    constraints give q̈_L = w - Z q̈_G with w = -A_L⁻¹γ, Z = A_L⁻¹A_G, the p ordinary coordinates
+    obey the p×p projected equations TᵀMT q̈_G = Tᵀ(f - M[0; w]), T = [I; -Z], and the multipliers
+    follow from A_Lᵀλ = (M q̈ - f)_L by back-substitution, λ_N first: the seed's "step backwards".
+    O(N) time and memory, no fill; M may have any sparsity.
+``sparse``
+    Anything else: the augmented matrix assembled in CSC from a pattern fixed at build time and
+    factored by SuperLU with the fill-reducing column ordering (COLAMD) of the first
+    factorization reused for every later one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.sparse as sps
+
+from .codegen import constraint_layout, dynamics_layout, energy_exprs
+from .errors import ModelError, StateError
+from .family import LazySeq
+from .solvers import SparseSolver, TriangularSolver, triangular_plan
+from .streams import Index, StreamKernel, indices, scatter_add, take
+
+
+class DynStreams:
+    """A dynamics block: mass entries (row, col) and forcing rows, as streams."""
+
+    def __init__(self, block, params: Sequence, values: Sequence[float]) -> None:
+        mass, fidx, exprs = dynamics_layout(block)
+        cols = block_columns(block)
+        n = block.n_inst
+        self.kernel = StreamKernel(cols, exprs, params, values, n)
+        self.mass = [(cols[a], cols[b]) for a, b in mass]
+        self.forcing = [cols[a] for a in fidx]
+        self._energy = (cols, block, params, values)
+        self._ekernel: StreamKernel | None = None
+
+    def energy(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
+        """(T, V) summed over the instances."""
+        if self._ekernel is None:
+            cols, block, params, values = self._energy
+            self._ekernel = StreamKernel(cols, energy_exprs(block), params, values, block.n_inst)
+        n = self._ekernel.count
+        T, V = (float(np.sum(x)) if np.ndim(x) else x * n for x in self._ekernel(t, q, qd))
+        return T, V
+
+
+class ConStreams:
+    """A constraint block: A entries over its rows, then b, bias (Ȧq̇ + ḃ) and f."""
+
+    def __init__(self, block, params: Sequence, values: Sequence[float]) -> None:
+        cols_local, exprs = constraint_layout(block)
+        cols = block_columns(block)
+        self.rows = Index(block.row0, 1, block.n_inst) if block.family else Index.of(block.rows)
+        self.cols = [cols[a] for a in cols_local]
+        na = len(self.cols)
+        self.acc = StreamKernel(cols, [*exprs[:na], exprs[na + 1]], params, values, block.n_inst)
+        self.res = StreamKernel(cols, exprs, params, values, block.n_inst)
+
+
+def block_columns(block) -> list:
+    """Per local coordinate: an :class:`Index` (progression) or an index array."""
+    if block.family:
+        return [Index(s, d, block.n_inst) for s, d in block.progressions]
+    return [Index.of(block.coords[:, a]) for a in range(block.coords.shape[1])]
+
+
+class StructuredModel:
+    """Compiled equations of motion of a system with families (see the module docstring).
+
+    Attributes
+    ----------
+    n, m : int
+    coordinate_names, multiplier_names, constraint_names : sequence of str
+        Made on demand (a family of 2^24 members has no list of names).
+    holonomic : ndarray of bool, shape (m,)
+    parameters : dict
+    solver : str
+        ``"triangular"`` or ``"sparse"``.
+    stats : dict
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> ring = pfaff.models.rolling_ring(1000, force=True, family=True)
+    >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
+    >>> q, qd = pfaff.models.ring_state(1000, radius=0.5, theta=0.3)
+    >>> qdd, lam = model.accelerations(0.0, q, qd)
+    >>> model.solver, round(float(qdd[1]), 12), round(float(lam[0]), 12)
+    ('triangular', 2.0, -1.0)
+    """
+
+    def __init__(self, eom, values: Sequence[float], *, solver: str | None = None) -> None:
+        params = tuple(eom.parameters)
+        self.n, self.m = eom.n, eom.m
+        coords = eom.coordinates
+        self.coordinate_names = LazySeq(self.n, lambda i: str(coords[i].func))
+        self.multiplier_names = LazySeq(self.m, lambda i: f"lambda{i + 1}")
+        self.constraint_names = eom.constraint_names
+        self.holonomic = np.asarray(eom.holonomic, dtype=bool).reshape(self.m)
+        self.parameters = {p.name: v for p, v in zip(params, values, strict=True)}
+        self._dyn = [
+            DynStreams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"
+        ]
+        self._con = [
+            ConStreams(b, params, values) for b in eom.blocks if b.local.kind != "dynamics"
+        ]
+        self.p = eom.n - sum(len(f) for f in getattr(eom.system, "families", []))
+        self.stats: dict = {"kkt_solves": 0}
+        self.solver = "none"
+        if solver != "none":
+            plan = triangular_plan(self) if solver in (None, "triangular") else None
+            if solver == "triangular" and plan is None:
+                raise ModelError("the constraints have no square banded triangular structure")
+            self._solver = TriangularSolver(self, plan) if plan is not None else SparseSolver(self)
+            self.solver = self.stats["solver"] = self._solver.name
+
+    # ------------------------------------------------------------------ validation
+    def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
+        try:
+            tt = float(t)
+            qa = np.asarray(q, dtype=float)
+            qda = np.asarray(qd, dtype=float)
+        except (TypeError, ValueError) as e:
+            raise StateError(f"`t`, `q` and `qd` must be real numbers and arrays: {e}") from e
+        for name, arr in (("q", qa), ("qd", qda)):
+            if arr.shape != (self.n,):
+                raise StateError(f"`{name}` must have shape ({self.n},), got shape {arr.shape}")
+            if not np.isfinite(arr).all():
+                raise StateError(f"`{name}` contains NaN or infinity")
+        if not np.isfinite(tt):
+            raise StateError("`t` is not finite")
+        return tt, qa, qda
+
+    # ------------------------------------------------------------------ raw evaluation
+    def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, np.ndarray]:
+        """Mass-entry values per block and the forcing vector Q - h."""
+        mvals, f = [], np.zeros(self.n)
+        for part in self._dyn:
+            outs = part.kernel(t, q, qd)
+            nm = len(part.mass)
+            mvals.append(outs[:nm])
+            for ix, v in zip(part.forcing, outs[nm:], strict=True):
+                scatter_add(f, ix, v)
+        return mvals, f
+
+    def _accel_constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, list]:
+        """A-entry values per block and bias (Ȧq̇ + ḃ) per block."""
+        avals, bias = [], []
+        for part in self._con:
+            outs = part.acc(t, q, qd)
+            avals.append(outs[:-1])
+            bias.append(outs[-1])
+        return avals, bias
+
+    def matvec(self, mvals: list, v: np.ndarray) -> np.ndarray:
+        """M v from evaluated mass entries."""
+        y = np.zeros(self.n)
+        for part, vals in zip(self._dyn, mvals, strict=True):
+            for (r, c), val in zip(part.mass, vals, strict=True):
+                scatter_add(y, r, np.multiply(val, take(c, v)))
+        return y
+
+    def a_matvec(self, avals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """A v from evaluated constraint entries."""
+        y = np.zeros(self.m) if out is None else out
+        for part, vals in zip(self._con, avals, strict=True):
+            for c, val in zip(part.cols, vals, strict=True):
+                scatter_add(y, part.rows, np.multiply(val, take(c, v)))
+        return y
+
+    def _rows_vector(self, per_block: list) -> np.ndarray:
+        out = np.zeros(self.m)
+        for part, v in zip(self._con, per_block, strict=True):
+            scatter_add(out, part.rows, v)
+        return out
+
+    # ------------------------------------------------------------------ public evaluation
+    def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
+        """Q - h, shape (n,)."""
+        return self._dynamics(*self._state(t, q, qd))[1]
+
+    def mass_matrix(self, t: float, q: object, qd: object | None = None) -> sps.csr_matrix:
+        """M(q, t) as a SciPy CSR matrix, shape (n, n)."""
+        t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
+        mvals, _ = self._dynamics(t, q, qd)
+        pairs = [rc for part in self._dyn for rc in part.mass]
+        vals = [v for vs in mvals for v in vs]
+        return _coo(pairs, vals, (self.n, self.n)).tocsr()
+
+    def constraint_matrix(self, t: float, q: object) -> sps.csr_matrix:
+        """A(q, t) as a SciPy CSR matrix, shape (m, n)."""
+        t, q, qd = self._state(t, q, np.zeros(self.n))
+        avals, _ = self._accel_constraints(t, q, qd)
+        pairs = [(part.rows, c) for part in self._con for c in part.cols]
+        vals = [v for vs in avals for v in vs]
+        return _coo(pairs, vals, (self.m, self.n)).tocsr()
+
+    def _residuals(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        f, g = np.zeros(self.m), np.zeros(self.m)
+        for part in self._con:
+            outs = part.res(t, q, qd)
+            na = len(part.cols)
+            for c, val in zip(part.cols, outs[:na], strict=True):
+                scatter_add(g, part.rows, np.multiply(val, take(c, qd)))
+            scatter_add(g, part.rows, outs[na])
+            scatter_add(f, part.rows, outs[na + 2])
+        return f, g
+
+    def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
+        """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
+        return self._residuals(*self._state(t, q, qd))
+
+    def acceleration_residual(self, t: float, q: object, qd: object, qdd: object) -> np.ndarray:
+        """A q̈ + Ȧq̇ + ḃ, shape (m,): zero for accelerations that satisfy the constraints."""
+        t, q, qd = self._state(t, q, qd)
+        qdd = np.asarray(qdd, dtype=float)
+        avals, bias = self._accel_constraints(t, q, qd)
+        return self.a_matvec(avals, qdd) + self._rows_vector(bias)
+
+    def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
+        """Kinetic and potential energy (T, V)."""
+        t, q, qd = self._state(t, q, qd)
+        TV = [part.energy(t, q, qd) for part in self._dyn]
+        return float(sum(x for x, _ in TV)), float(sum(v for _, v in TV))
+
+    # ------------------------------------------------------------------ solves
+    def _solve_accelerations(
+        self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """q̈, λ with the constraint rows' right-hand side -(Ȧq̇ + ḃ) - 2αg - β²f (Baumgarte)."""
+        mvals, f = self._dynamics(t, q, qd)
+        avals, bias = self._accel_constraints(t, q, qd)
+        zero = all(np.ndim(b) == 0 and b == 0 for b in bias)
+        c = None if zero else -self._rows_vector(bias)
+        if alpha or beta:
+            fr, g = self._residuals(t, q, qd)
+            c = (np.zeros(self.m) if c is None else c) - 2 * alpha * g - beta**2 * fr
+        self.stats["kkt_solves"] += 1
+        return self._solver.solve(mvals, f, avals, c)
+
+    def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
+        """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.rolling_ring(4, force=True, family=True).equations().compile(
+        ...     {"M": 2, "r": 0.5, "F": 2})
+        >>> q, qd = pfaff.models.ring_state(4, radius=0.5, theta=1.0, theta_dot=3.0)
+        >>> qdd, lam = model.accelerations(0.0, q, qd)
+        >>> round(float(qdd[0]), 12), round(float(lam[0]), 12)  # ẍ = F/(2M), λ_1 = -F/2
+        (0.5, -1.0)
+        """
+        return self._solve_accelerations(*self._state(t, q, qd))
+
+    def project(
+        self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """Project (q, q̇) onto f(q,t) = 0 and A q̇ + b = 0 with mass-weighted minimum-norm steps.
+
+        Newton on the positions, Δq = -M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹f (the KKT solve with zero forcing), then
+        one such step on the velocities. Returns the new q, q̇ and the number of Newton steps.
+        """
+        t, q, qd = self._state(t, q, qd)
+        q, it = q.copy(), 0
+        for it in range(1, max_iter + 1):
+            f, _ = self._residuals(t, q, qd)
+            if np.max(np.abs(f), initial=0.0) <= tol:
+                it -= 1
+                break
+            q += self._step(t, q, qd, -f)
+        _, g = self._residuals(t, q, qd)
+        qd = qd + self._step(t, q, qd, -g)
+        return q, qd, it
+
+    def _step(self, t: float, q: np.ndarray, qd: np.ndarray, c: np.ndarray) -> np.ndarray:
+        mvals, _ = self._dynamics(t, q, qd)
+        avals, _ = self._accel_constraints(t, q, qd)
+        return self._solver.solve(mvals, np.zeros(self.n), avals, c)[0]
+
+
+def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:
+    rows, cols, data = [], [], []
+    for (r, c), v in zip(pairs, vals, strict=True):
+        ri, ci = indices(r), indices(c)
+        n = max(np.size(ri), np.size(ci))
+        rows.append(np.broadcast_to(ri, (n,)))
+        cols.append(np.broadcast_to(ci, (n,)))
+        data.append(np.broadcast_to(np.asarray(v, dtype=float), (n,)))
+    cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0)  # noqa: E731
+    return sps.coo_matrix(
+        (cat(data), (cat(rows).astype(np.int64), cat(cols).astype(np.int64))), shape=shape
+    )
+
+
+def compile_structured(eom, parameters: dict, *, solver: str | None = None) -> StructuredModel:
+    """Check parameter values and build a :class:`StructuredModel` (used by ``eom.compile``)."""
+    from .compiler import parameter_values
+    from .memory import check_memory
+
+    check_memory(eom)
+    return StructuredModel(eom, parameter_values(tuple(eom.parameters), parameters), solver=solver)
