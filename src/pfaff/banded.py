@@ -99,12 +99,12 @@ class LowerBand:
             return self._lapack(c, "T")
         R, w, i0 = self.R, self.w, self.head
         a = R[:, -1]
-        z = np.empty_like(c, dtype=float)
-        if self.method == "cumsum":
-            rev = z[i0:][::-1]
-            np.multiply(c[i0:][::-1], 1.0 / a[0], out=rev)
-            np.cumsum(rev, axis=0, out=rev)
+        if self.method == "cumsum":  # z_i = c_i / a0 + z_(i+1): a running sum from the end
+            rev = np.multiply(c[::-1], 1.0 / a[0])
+            np.cumsum(rev[: self.m - i0], axis=0, out=rev[: self.m - i0])
+            z = rev[::-1]
         else:
+            z = np.empty_like(c, dtype=float)
             for ci, zi in zip(_columns(c), _columns(z), strict=True):
                 zi[i0:] = signal.lfilter([1.0], a, ci[i0:][::-1])[::-1]
         for i in range(i0 - 1, -1, -1):

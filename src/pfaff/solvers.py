@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg.blas as blas
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
@@ -90,6 +91,12 @@ class TriangularSolver:
                 self.var_border.append((bi, ei, g, rows))
             else:
                 scatter_add(self.G0[g], rows, val)
+        self.f_local_zero = all(
+            isinstance(ix, Index) and (ix.fixed or ix.count == 1) and ix.start < p
+            for part in model._dyn
+            for ix in part.forcing
+        )
+        self._v: np.ndarray | None = None
         self.band = None if self.var_band else LowerBand(self.R0, constant=True)
         self.Z = None
         if self.band is not None:
@@ -120,18 +127,26 @@ class TriangularSolver:
         """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
         model, p = self.model, self.plan.p
         band, Z = self._current(avals)
-        w = band.solve(c) if c is not None else None
-        Mw = model.matvec(mvals, np.concatenate([np.zeros(p), w])) if w is not None else None
-        r0 = f if Mw is None else f - Mw  # f - M[0; w]
-        MT = []
-        for g in range(p):
-            v = np.empty(model.n)
+        n = model.n
+        if self._v is None:
+            self._v = np.empty(n)
+            self._MT = [np.empty(n) for _ in range(p)]
+        r0 = f
+        if c is not None:  # w = A_L⁻¹ c; f - M[0; w]
+            w = band.solve(c)
+            self._v[:p] = 0.0
+            self._v[p:] = w
+            r0 = f - model.matvec(mvals, self._v)
+        fl = None if c is None and self.f_local_zero else r0[p:]
+        MT = self._MT
+        for g in range(p):  # M T, T = [I; -Z]
+            v = self._v
             v[:p] = 0.0
             v[g] = 1.0
             np.negative(Z[g], out=v[p:])
-            MT.append(model.matvec(mvals, v))
+            model.matvec(mvals, v, out=MT[g])
         Mr = np.array([[MT[g][h] - Z[h] @ MT[g][p:] for g in range(p)] for h in range(p)])
-        rr = np.array([r0[h] - Z[h] @ r0[p:] for h in range(p)])
+        rr = np.array([r0[h] - (0.0 if fl is None else Z[h] @ fl) for h in range(p)])
         try:
             qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
         except np.linalg.LinAlgError as e:
@@ -139,17 +154,26 @@ class TriangularSolver:
                 "the projected mass matrix TᵀMT is singular: a coordinate without inertia on "
                 "the admissible motions"
             ) from e
-        qdd = np.empty(model.n)
+        qdd = np.empty(n)
         qdd[:p] = qG
-        qL = qdd[p:]
-        qL[:] = 0.0 if w is None else w
-        for g in range(p):
-            qL -= qG[g] * Z[g]
-        res = -r0  # M q̈ - f = M[0; w] + Σ_g MT_g qG_g - f
-        for g in range(p):
-            res += qG[g] * MT[g]
-        lam = band.solve_t(res[p:])
-        return qdd, lam
+        _combine(qdd[p:], None if c is None else w, Z, -qG)  # q̈_L = w - Z q̈_G
+        res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
+        _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
+        return qdd, band.solve_t(res)
+
+
+def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
+    """out = base + Σ_g coef_g vecs_g, in place."""
+    start = 0
+    if base is not None:
+        out[:] = base
+    elif len(coef):
+        np.multiply(vecs[0], coef[0], out=out)
+        start = 1
+    else:
+        out.fill(0.0)
+    for g in range(start, len(coef)):
+        blas.daxpy(vecs[g], out, a=float(coef[g]))
 
 
 class SparseSolver:
@@ -198,7 +222,7 @@ class SparseSolver:
         model = self.model
         data = []
         for part, vals in zip(model._dyn, mvals, strict=True):
-            for (r, cc), v in zip(part.mass, vals, strict=True):
+            for (r, cc), v in zip(part.mass, part.mass_values(vals), strict=True):
                 data.append(np.broadcast_to(np.asarray(v, float), (_count(r, cc),)))
         for part, vals in zip(model._con, avals, strict=True):
             for cc, v in zip(part.cols, vals, strict=True):

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg.blas as blas
 import sympy as sp
 
 from .symbols import local_q, local_qd, t
@@ -87,6 +88,38 @@ def scatter_add(out: np.ndarray, ix: Index | np.ndarray, vals: np.ndarray | floa
 def indices(ix: Index | np.ndarray) -> np.ndarray:
     """An index set as an array."""
     return ix.indices() if isinstance(ix, Index) else ix
+
+
+def add_product(
+    out: np.ndarray,
+    row: Index | np.ndarray,
+    val: np.ndarray | float,
+    xv: np.ndarray | float,
+    tmp: np.ndarray,
+) -> None:
+    """out[row] += val * xv over the instances, with as few passes over memory as possible.
+
+    ``xv`` is x taken at the stream's columns (an array view or a scalar); ``tmp`` is scratch of
+    at least the stream's length.
+    """
+    if not isinstance(row, Index):
+        np.add.at(out, row, np.broadcast_to(np.multiply(val, xv), row.shape))
+    elif row.fixed:
+        out[row.start] += dot(val, xv) if np.ndim(val) or np.ndim(xv) else val * xv * row.count
+    else:
+        target = out[row.slice()]
+        if np.ndim(val) and np.ndim(xv):
+            t_ = tmp[: row.count]
+            np.multiply(val, xv, out=t_)
+            target += t_
+        elif np.ndim(val) or np.ndim(xv):
+            arr, s = (val, xv) if np.ndim(val) else (xv, val)
+            if target.flags.c_contiguous and arr.flags.c_contiguous and row.count > 1:
+                blas.daxpy(arr, target, a=float(s))  # in place, one pass
+            else:
+                target += np.multiply(arr, s)
+        else:
+            target += val * xv
 
 
 def dot(vals: np.ndarray | float, x: np.ndarray | float) -> float:

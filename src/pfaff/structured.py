@@ -27,25 +27,37 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.sparse as sps
 
-from .codegen import constraint_layout, dynamics_layout, energy_exprs
+from .codegen import constraint_layout, energy_exprs
 from .errors import ModelError, StateError
 from .family import LazySeq
 from .solvers import SparseSolver, TriangularSolver, triangular_plan
-from .streams import Index, StreamKernel, indices, scatter_add, take
+from .streams import Index, StreamKernel, add_product, indices, scatter_add, take
 
 
 class DynStreams:
     """A dynamics block: mass entries (row, col) and forcing rows, as streams."""
 
     def __init__(self, block, params: Sequence, values: Sequence[float]) -> None:
-        mass, fidx, exprs = dynamics_layout(block)
+        loc = block.local
+        upper = sorted(ab for ab in loc.mass if ab[0] <= ab[1])  # M is symmetric: a <= b only
+        forcing = loc.forcing
+        fidx = sorted(forcing)
+        exprs = [loc.mass[ab] for ab in upper] + [forcing[a] for a in fidx]
         cols = block_columns(block)
-        n = block.n_inst
-        self.kernel = StreamKernel(cols, exprs, params, values, n)
-        self.mass = [(cols[a], cols[b]) for a, b in mass]
+        self.kernel = StreamKernel(cols, exprs, params, values, block.n_inst)
+        # (row, col) of each stored entry and whether it also stands for (col, row)
+        self.upper = [(cols[a], cols[b], a != b) for a, b in upper]
+        self.mass = [(cols[a], cols[b]) for a, b in upper] + [
+            (cols[b], cols[a]) for a, b in upper if a != b
+        ]
         self.forcing = [cols[a] for a in fidx]
         self._energy = (cols, block, params, values)
         self._ekernel: StreamKernel | None = None
+
+    def mass_values(self, outs: list) -> list:
+        """Values of :attr:`mass` entries from the kernel outputs (mirrored entries repeated)."""
+        nu = len(self.upper)
+        return outs[:nu] + [v for (_, _, sym), v in zip(self.upper, outs, strict=False) if sym]
 
     def energy(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
         """(T, V) summed over the instances."""
@@ -119,6 +131,7 @@ class StructuredModel:
         ]
         self.p = eom.n - sum(len(f) for f in getattr(eom.system, "families", []))
         self.stats: dict = {"kkt_solves": 0}
+        self._tmp: np.ndarray | None = None
         self.solver = "none"
         if solver != "none":
             plan = triangular_plan(self) if solver in (None, "triangular") else None
@@ -150,7 +163,7 @@ class StructuredModel:
         mvals, f = [], np.zeros(self.n)
         for part in self._dyn:
             outs = part.kernel(t, q, qd)
-            nm = len(part.mass)
+            nm = len(part.upper)
             mvals.append(outs[:nm])
             for ix, v in zip(part.forcing, outs[nm:], strict=True):
                 scatter_add(f, ix, v)
@@ -165,13 +178,24 @@ class StructuredModel:
             bias.append(outs[-1])
         return avals, bias
 
-    def matvec(self, mvals: list, v: np.ndarray) -> np.ndarray:
-        """M v from evaluated mass entries."""
-        y = np.zeros(self.n)
+    def matvec(self, mvals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """M v from evaluated (upper-triangle) mass entries."""
+        y = np.zeros(self.n) if out is None else out
+        if out is not None:
+            y.fill(0.0)
+        tmp = self._scratch()
         for part, vals in zip(self._dyn, mvals, strict=True):
-            for (r, c), val in zip(part.mass, vals, strict=True):
-                scatter_add(y, r, np.multiply(val, take(c, v)))
+            for (r, c, sym), val in zip(part.upper, vals, strict=True):
+                add_product(y, r, val, take(c, v), tmp)
+                if sym:
+                    add_product(y, c, val, take(r, v), tmp)
         return y
+
+    def _scratch(self) -> np.ndarray:
+        if self._tmp is None:
+            counts = [part.kernel.count for part in self._dyn] + [p.acc.count for p in self._con]
+            self._tmp = np.empty(max(counts, default=0))
+        return self._tmp
 
     def a_matvec(self, avals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """A v from evaluated constraint entries."""
@@ -197,7 +221,7 @@ class StructuredModel:
         t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
         mvals, _ = self._dynamics(t, q, qd)
         pairs = [rc for part in self._dyn for rc in part.mass]
-        vals = [v for vs in mvals for v in vs]
+        vals = [v for part, vs in zip(self._dyn, mvals, strict=True) for v in part.mass_values(vs)]
         return _coo(pairs, vals, (self.n, self.n)).tocsr()
 
     def constraint_matrix(self, t: float, q: object) -> sps.csr_matrix:
