@@ -60,6 +60,10 @@ def _options(method: str, kw: dict) -> dict:
         v = kw[key]
         if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
             raise StateError(f"`{key}` must be a finite number >= 0; got {v!r}")
+    if kw.get("ida_jacobian") not in (None, "fd", "approximate"):
+        raise StateError(
+            f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r}"
+        )
     if kw["rtol"] <= 0 or kw["atol"] <= 0:
         raise StateError("`rtol` and `atol` must be positive")
     return kw
