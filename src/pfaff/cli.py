@@ -100,8 +100,6 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
 def _write_outputs(traj, args: argparse.Namespace, rep: dict) -> None:
     if args.output:
         suffix = args.output.rsplit(".", 1)[-1].lower()
-        if suffix not in ("nc", "csv"):
-            raise PfaffError(f"--output must end in .nc or .csv; got {args.output!r}")
         (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
         rep["output"] = args.output
     if args.plot:
@@ -113,6 +111,8 @@ def run_simulation(args: argparse.Namespace) -> int:
     """Run ``pfaff demo ring|pendulum --simulate``."""
     from .simdemo import format_simulation, pendulum_simulation, ring_simulation
 
+    if args.output and args.output.rsplit(".", 1)[-1].lower() not in ("nc", "csv"):
+        raise PfaffError(f"--output must end in .nc or .csv; got {args.output!r}")
     opts = {"t_end": args.t_end, "method": args.method, "rtol": args.rtol, "atol": args.atol}
     if args.demo == "ring":
         rep, traj = ring_simulation(

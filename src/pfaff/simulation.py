@@ -60,6 +60,10 @@ def _options(method: str, kw: dict) -> dict:
         v = kw[key]
         if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
             raise StateError(f"`{key}` must be a finite number >= 0; got {v!r}")
+    if kw.get("ida_jacobian") not in (None, "fd", "approximate"):
+        raise StateError(
+            f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r}"
+        )
     if kw["rtol"] <= 0 or kw["atol"] <= 0:
         raise StateError("`rtol` and `atol` must be positive")
     return kw
@@ -108,6 +112,7 @@ def simulate(
     initial_tol: float = 1e-8,
     project_initial: bool = False,
     project_output: bool | None = None,
+    ida_jacobian: str | None = None,
     progress: bool | None = None,
     throw: bool = False,
 ) -> Trajectory:
@@ -144,6 +149,9 @@ def simulate(
         Project an inconsistent initial state instead of raising.
     project_output : bool, optional
         Project reported states (default: yes, except for "baumgarte", whose drift is reported).
+    ida_jacobian : {"fd", "approximate"}, optional
+        IDA's Newton matrix: finite differences (default up to 80 unknowns) or assembled from M
+        and A without curvature terms (default beyond).
     progress : bool, optional
         Progress bar on stderr for runs longer than a second; default: when stderr is a terminal.
     throw : bool
@@ -178,6 +186,7 @@ def simulate(
             first_step=first_step,
             initial_tol=initial_tol,
             project_initial=project_initial,
+            ida_jacobian=ida_jacobian,
         ),
     )
     projector = Projector(model, tol=constraint_tol)
