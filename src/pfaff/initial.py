@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ConstraintError, StateError
+from .projection import residuals
 
 
 def _indices(model: Any, independent: Sequence[int | str]) -> np.ndarray:
@@ -83,18 +84,18 @@ def consistent_state(
     dep = np.setdiff1d(np.arange(model.n), ind)
     hol = np.asarray(model.holonomic, dtype=bool)
     q, qd = q.copy(), qd.copy()
-    f = np.where(hol, model._residual(t, q, qd)[0], 0.0)
+    f = np.where(hol, residuals(model, t, q, qd)[0], 0.0)
     for _ in range(max_iter):
         if np.abs(f).max(initial=0.0) <= tol:
             break
         A = _dense(model.constraint_matrix(t, q))[hol][:, dep]
         q[dep] -= np.linalg.lstsq(A, f[hol], rcond=None)[0]
-        f = np.where(hol, model._residual(t, q, qd)[0], 0.0)
+        f = np.where(hol, residuals(model, t, q, qd)[0], 0.0)
     A = _dense(model.constraint_matrix(t, q))
-    g = model._residual(t, q, qd)[1]
+    g = residuals(model, t, q, qd)[1]
     if dep.size and model.m:
         qd[dep] -= np.linalg.lstsq(A[:, dep], g, rcond=None)[0]
-    f, g = model._residual(t, q, qd)
+    f, g = residuals(model, t, q, qd)
     worst = max(np.abs(np.where(hol, f, 0.0)).max(initial=0.0), np.abs(g).max(initial=0.0))
     if not np.isfinite(worst) or worst > max(tol, 1e-9):
         raise ConstraintError(

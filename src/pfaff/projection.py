@@ -45,6 +45,12 @@ def _correction(A: np.ndarray | sps.spmatrix, d: np.ndarray, r: np.ndarray) -> n
     return Ad.T @ y
 
 
+def residuals(model: Any, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(f, A q̇ + b) of any numeric model: its unchecked ``_residual`` when it has one."""
+    fn = getattr(model, "_residual", None)
+    return fn(t, q, qd) if fn is not None else model.constraint_residual(t, q, qd)
+
+
 class Projector:
     """Project states onto the constraint manifold of a numeric model.
 
@@ -153,7 +159,7 @@ class Projector:
 
     def residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
         """max(|f|, |A q̇ + b|) at a state."""
-        f, g = self.model._residual(t, q, qd)
+        f, g = residuals(self.model, t, q, qd)
         return float(
             max(np.abs(np.where(self.holonomic, f, 0.0)).max(initial=0), np.abs(g).max(initial=0))
         )

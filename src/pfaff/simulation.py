@@ -18,7 +18,7 @@ import numpy as np
 from .errors import PfaffError, SimulationError, StateError
 from .ida import IDAStepper
 from .integrators import BaumgarteRK, ProjectedRK
-from .projection import Projector
+from .projection import Projector, residuals
 from .trajectory import Trajectory
 
 METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
@@ -76,7 +76,7 @@ def initial_state(
     t0, q, qd = model._state(t0, q0, qd0)
     if model.m == 0:
         return q, qd
-    f, g = model._residual(t0, q, qd)
+    f, g = residuals(model, t0, q, qd)
     f = np.where(projector.holonomic, f, 0.0)
     worst = max(np.abs(f).max(), np.abs(g).max())
     if worst > opts["initial_tol"] and not opts["project_initial"]:
@@ -267,12 +267,30 @@ class _Run:
         return status, message
 
 
+def _evaluate(model: Any, T: np.ndarray, Q: np.ndarray, QD: np.ndarray) -> dict:
+    """q̈, λ, f, g and energies at every reported state (batched when the model can)."""
+    if hasattr(model, "evaluate_states"):
+        return model.evaluate_states(T, Q, QD)
+    k, n, m = len(T), model.n, model.m
+    out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m))}
+    out |= {key: np.zeros((k, m)) for key in ("f", "g")}
+    out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
+    for i in range(k):
+        t, q, qd = float(T[i]), Q[i], QD[i]
+        out["qdd"][i], out["multipliers"][i] = model._solve_accelerations(t, q, qd)
+        out["f"][i], out["g"][i] = residuals(model, t, q, qd)
+        out["T"][i], out["V"][i] = model.energy(t, q, qd)
+        out["T0"][i] = model.energy(t, q, np.zeros(n))[0]
+        out["T2"][i] = 0.5 * (out["T"][i] + model.energy(t, q, -qd)[0]) - out["T0"][i]
+    return out
+
+
 def _trajectory(model, method, run, status, message, stats, projector, project_output):
     n, m = model.n, model.m
     T = np.array(run.T)
     Q = np.array(run.Q).reshape(len(T), n)
     QD = np.array(run.QD).reshape(len(T), n)
-    ev = model.evaluate_states(T, Q, QD) if len(T) else None
+    ev = _evaluate(model, T, Q, QD) if len(T) else None
     if ev is None:
         z, zm = np.zeros((0, n)), np.zeros((0, m))
         ev = {"qdd": z, "multipliers": zm, "f": zm, "g": zm, "T": T, "V": T, "T0": T, "T2": T}
