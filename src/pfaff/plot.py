@@ -8,6 +8,8 @@ import numpy as np
 
 from .files import atomic_path
 
+PLOT_POINTS = 20_000  # multipliers drawn at most
+
 
 def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     """Draw the ring demo of :func:`pfaff.demo.ring_report` to ``path`` (PNG, SVG or PDF).
@@ -82,10 +84,12 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     ax.legend(loc="upper right", fontsize=8)
     ax.set_xlabel("x")
     # --- multipliers
-    k = np.arange(1, n + 1)
+    # every multiplier up to PLOT_POINTS, else a log-spaced sample (16 million points draw nothing new)
+    k = np.unique(np.geomspace(1, n, PLOT_POINTS).astype(np.int64)) if n > PLOT_POINTS else None
+    k = np.arange(1, n + 1) if k is None else k
     bx.plot(
         k[1:],
-        lam[1:],
+        lam[k[1:] - 1],
         ".-",
         ms=3 if n > 64 else 6,
         color="tab:blue",

@@ -96,7 +96,10 @@ class TriangularSolver:
             for part in model._dyn
             for ix in part.forcing
         )
-        self._v: np.ndarray | None = None
+        self._v = np.zeros(model.n)  # work vectors, touched now rather than in the first solve
+        self._MT = [np.zeros(model.n) for _ in range(p)]
+        for x in [self._v, *self._MT]:
+            x.fill(0.0)
         self.band = None if self.var_band else LowerBand(self.R0, constant=True)
         self.Z = None
         if self.band is not None:
@@ -128,9 +131,6 @@ class TriangularSolver:
         model, p = self.model, self.plan.p
         band, Z = self._current(avals)
         n = model.n
-        if self._v is None:
-            self._v = np.empty(n)
-            self._MT = [np.empty(n) for _ in range(p)]
         r0 = f
         if c is not None:  # w = A_L⁻¹ c; f - M[0; w]
             w = band.solve(c)

@@ -178,6 +178,12 @@ class StreamKernel:
         )
         self._out: np.ndarray | None = None
 
+    def warm(self) -> None:
+        """Allocate and touch the output buffers now (page faults at build time, not in a solve)."""
+        if self._fn is not None and self._out is None:
+            self._out = np.zeros((len(self.varying), self.count))
+            self._out.fill(0.0)
+
     def __call__(self, t_: float, q: np.ndarray, qd: np.ndarray) -> list:
         """Every output over the instances: a float (constant) or an array, shape (count,).
 

@@ -139,6 +139,11 @@ class StructuredModel:
                 raise ModelError("the constraints have no square banded triangular structure")
             self._solver = TriangularSolver(self, plan) if plan is not None else SparseSolver(self)
             self.solver = self.stats["solver"] = self._solver.name
+            for part in self._dyn:
+                part.kernel.warm()
+            for part in self._con:
+                part.acc.warm()
+            self._scratch().fill(0.0)
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
@@ -253,6 +258,25 @@ class StructuredModel:
         qdd = np.asarray(qdd, dtype=float)
         avals, bias = self._accel_constraints(t, q, qd)
         return self.a_matvec(avals, qdd) + self._rows_vector(bias)
+
+    def generalized_constraint_force(
+        self, t: float, q: object, qd: object, qdd: object
+    ) -> np.ndarray:
+        """M q̈ - (Q - h), shape (n,): the generalized constraint force Aᵀλ on a motion."""
+        t, q, qd = self._state(t, q, qd)
+        mvals, f = self._dynamics(t, q, qd)
+        return self.matvec(mvals, np.asarray(qdd, dtype=float)) - f
+
+    def constraint_force(self, t: float, q: object, lam: object) -> np.ndarray:
+        """Aᵀλ, shape (n,)."""
+        t, q, qd = self._state(t, q, np.zeros(self.n))
+        avals, _ = self._accel_constraints(t, q, qd)
+        lam = np.asarray(lam, dtype=float)
+        y, tmp = np.zeros(self.n), self._scratch()
+        for part, vals in zip(self._con, avals, strict=True):
+            for c, val in zip(part.cols, vals, strict=True):
+                add_product(y, c, val, take(part.rows, lam), tmp)
+        return y
 
     def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
         """Kinetic and potential energy (T, V)."""
