@@ -1,0 +1,178 @@
+"""Benchmark: the seed's rolling ring from N = 10^3 to N = 2^24 particles through the family model.
+
+For every N a fresh subprocess (so that peak RSS is per N) builds ``pfaff.models.rolling_ring(N,
+force=F)`` (the family form above N = 1024; below, ``family=True`` is forced), derives and compiles
+it, and measures:
+
+``build``
+    model -> equations -> compiled :class:`pfaff.structured.StructuredModel`, seconds
+``solve``
+    one ``model.accelerations(t, q, q̇)`` (q̈ and λ), best of 3, seconds
+``floor``
+    the memory-bandwidth floor measured in the same process: the best time to copy with NumPy
+    (``ndarray.copy``) every array the solve cannot avoid touching once: the state q and q̇, the
+    results q̈ and λ, and the model's state-dependent matrix arrays (the values of M and A that vary
+    with q, one array per varying template output); ``solve/floor`` is the ratio
+``spsolve``
+    the same solve written by hand: K = [[M, Aᵀ], [A, 0]] from the model's sparse M and A, then
+    ``scipy.sparse.linalg.spsolve(K, rhs)``, seconds for spsolve alone (N <= --spsolve-max)
+``rss``
+    peak resident set size of the subprocess, MiB
+``θ̈ err``, ``residual``
+    max |θ̈_k - F/(2Mr)| / (F/(2Mr)) and max(|f|, |A q̇ + b|, |A q̈ + Ȧq̇|)
+
+Targets at N = 2^24: solve <= 1 s, solve <= 5 x floor, peak RSS <= 8 GiB, θ̈ to 1e-9 relative,
+residual <= 1e-9. Run from the project root::
+
+    python benchmarks/ring_scale.py                 # N = 10^3, 10^4, 10^5, 10^6, 2^22, 2^24
+    python benchmarks/ring_scale.py --sizes 1000 1048576 --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+
+SIZES = [1000, 10_000, 100_000, 1_000_000, 2**20, 2**22, 2**24]
+M_, R_, F_ = 1.0, 0.5, 2.0
+
+
+def best(fn, repeat: int = 3) -> float:
+    """Best wall time of ``repeat`` calls."""
+    out = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        out = min(out, time.perf_counter() - t0)
+    return out
+
+
+def floor_time(model, arrays: list) -> float:
+    """Time to copy every unavoidable array once (state, results, varying matrix values)."""
+    varying = [part.kernel._out for part in model._dyn if part.kernel._out is not None]
+    varying += [part.acc._out for part in model._con if part.acc._out is not None]
+    todo = list(arrays) + varying
+    return best(lambda: [a.copy() for a in todo])
+
+
+def spsolve_time(model, q, qd) -> float:
+    """The hand-written baseline: assemble [[M, Aᵀ], [A, 0]] and call spsolve."""
+    import numpy as np
+    import scipy.sparse as sps
+    import scipy.sparse.linalg as spla
+
+    M = model.mass_matrix(0.0, q)
+    A = model.constraint_matrix(0.0, q)
+    K = sps.bmat([[M, A.T], [A, None]], format="csc")
+    rhs = np.concatenate([model.forcing(0.0, q, qd), np.zeros(model.m)])
+    t0 = time.perf_counter()
+    sol = spla.spsolve(K, rhs)
+    dt = time.perf_counter() - t0
+    assert abs(sol[1] - F_ / (2 * M_ * R_)) < 1e-8
+    return dt
+
+
+def one(n: int, spsolve_max: int) -> dict:
+    """Measure one N (run in a subprocess)."""
+    import numpy as np
+
+    import pfaff
+
+    t0 = time.perf_counter()
+    ring = pfaff.models.rolling_ring(n, force=True, family=True)
+    model = ring.equations().compile({"M": M_, "r": R_, "F": F_})
+    build = time.perf_counter() - t0
+    q, qd = pfaff.models.ring_state(n, R_, theta=np.pi, theta_dot=0.7)
+    out: list = []
+    solve = best(lambda: out.append(model.accelerations(0.0, q, qd)))
+    qdd, lam = out[-1]
+    floor = floor_time(model, [q, qd, qdd, lam])
+    f, g = model.constraint_residual(0.0, q, qd)
+    acc = model.acceleration_residual(0.0, q, qd, qdd)
+    exact = F_ / (2 * M_ * R_)
+    row = {
+        "N": n,
+        "build_s": build,
+        "solve_s": solve,
+        "floor_s": floor,
+        "solve_over_floor": solve / floor,
+        "spsolve_s": spsolve_time(model, q, qd) if n <= spsolve_max else None,
+        "theta_ddot_rel_err": float(np.max(np.abs(qdd[1:] - exact)) / exact),
+        "friction": float(lam[0]),
+        "residual": float(max(np.max(np.abs(x)) for x in (f, g, acc))),
+        "solver": model.solver,
+    }
+    row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return row
+
+
+def table(rows: list[dict]) -> str:
+    """The printed table."""
+    head = (
+        f"{'N':>10} {'build s':>8} {'solve s':>8} {'floor s':>8} {'solve/floor':>11} "
+        f"{'spsolve s':>9} {'rss MiB':>8} {'θ̈ rel err':>10} {'residual':>9}  solver"
+    )
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        sp_ = f"{r['spsolve_s']:9.3f}" if r["spsolve_s"] is not None else f"{'-':>9}"
+        lines.append(
+            f"{r['N']:>10} {r['build_s']:8.3f} {r['solve_s']:8.3f} {r['floor_s']:8.3f} "
+            f"{r['solve_over_floor']:11.2f} {sp_} {r['peak_rss_mb']:8.0f} "
+            f"{r['theta_ddot_rel_err']:10.1e} {r['residual']:9.1e}  {r['solver']}"
+        )
+    return "\n".join(lines)
+
+
+def verdict(rows: list[dict]) -> list[str]:
+    """Targets at the largest N = 2^24, if measured."""
+    big = [r for r in rows if r["N"] == 2**24]
+    if not big:
+        return ["(targets apply at N = 2^24, not measured)"]
+    r = big[0]
+    checks = [
+        ("one solve <= 1 s", r["solve_s"] <= 1.0, f"{r['solve_s']:.3f} s"),
+        ("solve <= 5 x floor", r["solve_over_floor"] <= 5, f"{r['solve_over_floor']:.2f} x"),
+        ("peak RSS <= 8 GiB", r["peak_rss_mb"] <= 8192, f"{r['peak_rss_mb']:.0f} MiB"),
+        ("θ̈ = F/(2Mr) to 1e-9", r["theta_ddot_rel_err"] <= 1e-9, f"{r['theta_ddot_rel_err']:.1e}"),
+        ("residual <= 1e-9", r["residual"] <= 1e-9, f"{r['residual']:.1e}"),
+    ]
+    return [f"  {'PASS' if ok else 'FAIL'}  {name:<22} {val}" for name, ok, val in checks]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=SIZES)
+    ap.add_argument("--spsolve-max", type=int, default=2**20)
+    ap.add_argument("--json", metavar="FILE")
+    ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.one:
+        print(json.dumps(one(args.one, args.spsolve_max)))
+        return 0
+    rows = []
+    for n in args.sizes:
+        cmd = [sys.executable, os.path.abspath(__file__), "--one", str(n)]
+        cmd += ["--spsolve-max", str(args.spsolve_max)]
+        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        if done.returncode:
+            print(f"N = {n}: failed\n{done.stderr[-2000:]}", file=sys.stderr)
+            continue
+        rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
+        print(table(rows).splitlines()[-1], flush=True)
+    print()
+    print(f"Rolling ring, M = {M_}, r = {R_}, F = {F_}; {os.cpu_count()} CPUs")
+    print(table(rows))
+    print("\n".join(verdict(rows)))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
