@@ -128,7 +128,7 @@ def ring_report(
     rep["reduced_theta_ddot"] = float(red_model.accelerations(0.0, [np.pi], [theta_dot])[0][0])
     rep["timings"] = sw.timings
     rep["timings"]["total"] = float(sum(sw.timings.values()))
-    rep["timings"]["solve_per_particle_ns"] = 1e9 * rep["timings"]["solve"] / n
+    rep["solve_ns_per_particle"] = 1e9 * rep["timings"]["solve"] / n
     rep["peak_rss_mb"] = peak_rss_mb()
     rep["_arrays"] = {"q": q, "qdd": qdd, "lam": lam, "generalized_constraint_force": resid}
     return rep
@@ -193,7 +193,8 @@ def format_report(rep: dict) -> str:
         "Multipliers by back-substitution (the seed's step backwards: λ_N first, λ_1 last):",
         f"  order: λ_{', λ_'.join(map(str, rep['back_substitution_order']))}, …",
     ]
-    show = list(range(min(n, 4))) + ([n - 1] if n > 4 else [])
+    listed = len(lam)  # the report lists the first MAX_LISTED multipliers of a large ring
+    show = list(range(min(listed, 4))) + ([listed - 1] if listed > 4 else [])
     for i in show:
         out.append(
             f"  λ_{i + 1:<4} = {lam[i]: .10f}   back-substituted {rep['multipliers_back_substitution'][i]: .10f}"

@@ -9,8 +9,11 @@ stay in cache.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import scipy.linalg.blas as blas
@@ -19,6 +22,17 @@ import sympy as sp
 from .symbols import local_q, local_qd, t
 
 CHUNK = 1 << 15  # instances per kernel call
+# NumPy releases the GIL inside ufunc loops: large kernels run their chunks on THREADS threads.
+THREADS = min(2, os.cpu_count() or 1)
+PARALLEL_FROM = 1 << 20
+_POOL: ThreadPoolExecutor | None = None
+
+
+def _pool() -> ThreadPoolExecutor:
+    global _POOL
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(THREADS, thread_name_prefix="pfaff-kernel")
+    return _POOL
 
 
 @dataclass(frozen=True)
@@ -178,6 +192,15 @@ class StreamKernel:
         )
         self._out: np.ndarray | None = None
 
+    def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
+        out = self._out
+        for lo in range(start, stop, CHUNK):
+            hi = min(lo + CHUNK, stop)
+            args = [take(c, q, lo, hi) for c in self.columns]
+            args += [take(c, qd, lo, hi) for c in self.columns]
+            for j, r in enumerate(self._fn(*args, t_)):
+                out[j, lo:hi] = r
+
     def warm(self) -> None:
         """Allocate and touch the output buffers now (page faults at build time, not in a solve)."""
         if self._fn is not None and self._out is None:
@@ -194,12 +217,13 @@ class StreamKernel:
         if self._out is None:
             self._out = np.empty((len(self.varying), self.count))
         out = self._out
-        for lo in range(0, self.count, CHUNK):
-            hi = min(lo + CHUNK, self.count)
-            args = [take(c, q, lo, hi) for c in self.columns]
-            args += [take(c, qd, lo, hi) for c in self.columns]
-            for j, r in enumerate(self._fn(*args, t_)):
-                out[j, lo:hi] = r
+        if self.count >= PARALLEL_FROM and THREADS > 1:
+            bounds = np.linspace(0, self.count, THREADS + 1).astype(int) // CHUNK * CHUNK
+            bounds[-1] = self.count
+            spans = list(pairwise(int(b) for b in bounds))
+            list(_pool().map(lambda s: self._run(t_, q, qd, *s), spans))
+        else:
+            self._run(t_, q, qd, 0, self.count)
         res = list(self.const)
         for j, i in enumerate(self.varying):
             res[i] = out[j]
