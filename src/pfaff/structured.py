@@ -118,7 +118,7 @@ class StructuredModel:
         params = tuple(eom.parameters)
         self.n, self.m = eom.n, eom.m
         coords = eom.coordinates
-        self.coordinate_names = LazySeq(self.n, lambda i: str(coords[i].func))
+        self.coordinate_names = LazySeq(self.n, _namer(eom, coords))
         self.multiplier_names = LazySeq(self.m, lambda i: f"lambda{i + 1}")
         self.constraint_names = eom.constraint_names
         self.holonomic = np.asarray(eom.holonomic, dtype=bool).reshape(self.m)
@@ -338,6 +338,22 @@ class StructuredModel:
         mvals, _ = self._dynamics(t, q, qd)
         avals, _ = self._accel_constraints(t, q, qd)
         return self._solver.solve(mvals, np.zeros(self.n), avals, c)[0]
+
+
+def _namer(eom, coords):
+    """Coordinate name by index, as plain strings (no SymPy object per family member)."""
+    fams = list(getattr(eom.system, "families", []))
+    p = eom.n - sum(f.n for f in fams)
+
+    def name(i: int) -> str:
+        if i < p:
+            return str(coords[i].func)
+        for f in fams:
+            if f.offset <= i < f.offset + f.n:
+                return f"{f.name}{f.first + i - f.offset}"
+        return str(coords[i].func)
+
+    return name
 
 
 def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:
