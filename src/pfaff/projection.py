@@ -8,8 +8,9 @@ diagonal D (so that lengths and angles are weighed by their inertia):
 
 The damping δ = 1e-7 σ_max (Tikhonov: the pseudo-inverse of A D^{-1/2} with filter factors
 σ/(σ² + δ²)) matters only where the constraint Jacobian loses rank — a linkage folded flat: there
-the correction along the degenerate direction stays bounded instead of throwing the state onto
-another branch. Dense matrices go to LAPACK, sparse ones to SuperLU. A model may supply its own
+the correction along the degenerate direction stays bounded. (This does not keep a linkage on its
+branch through a fold: the acceleration-level KKT solve itself is singular there; see the xfail
+tests in tests/test_simulate_fourbar.py.) Dense matrices go to LAPACK, sparse ones to SuperLU. A model may supply its own
 ``project(t, q, qd, tol=, max_iter=)`` (structured O(N) solvers do).
 """
 

@@ -260,6 +260,11 @@ class _Run:
             status, message = "interrupted", f"interrupted by the user at t = {st.t:.17g}"
         except (PfaffError, FloatingPointError, np.linalg.LinAlgError, ArithmeticError) as e:
             status, message = "failed", f"failed at t = {st.t:.17g}: {e}"
+        except ValueError as e:  # a math domain error in compiled scalar code (sqrt of x < 0, ...)
+            status, message = (
+                "failed",
+                f"failed at t = {st.t:.17g}: the equations are not defined there ({e})",
+            )
         finally:
             self.cpu = time.process_time() - start
             if bar is not None:
