@@ -56,6 +56,29 @@ def _slots(lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return uniq, slot.ravel()
 
 
+def check_state(
+    t: object, q: object, qd: object, n: int, names: Sequence[str] | None = None
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """Validate a numeric state: real t, finite q and q̇ of shape (n,); names go in the message."""
+    try:
+        tt = float(t)  # type: ignore[arg-type]
+        qa = np.asarray(q, dtype=float)
+        qda = np.asarray(qd, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise StateError(f"`t`, `q` and `qd` must be real numbers and arrays: {e}") from e
+    for name, arr in (("q", qa), ("qd", qda)):
+        if arr.shape != (n,):
+            which = ","
+            if names is not None:
+                which = f" for coordinates {', '.join(names[:6])}{'...' if n > 6 else ''};"
+            raise StateError(f"`{name}` must have shape ({n},){which} got shape {arr.shape}")
+        if not np.isfinite(arr).all():
+            raise StateError(f"`{name}` contains NaN or infinity")
+    if not np.isfinite(tt):
+        raise StateError("`t` is not finite")
+    return tt, qa, qda
+
+
 class NumericModel:
     """Compiled equations of motion for one set of parameter values.
 
@@ -113,24 +136,7 @@ class NumericModel:
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
-        try:
-            tt = float(t)
-            qa = np.asarray(q, dtype=float)
-            qda = np.asarray(qd, dtype=float)
-        except (TypeError, ValueError) as e:
-            raise StateError(f"`t`, `q` and `qd` must be real numbers and arrays: {e}") from e
-        for name, arr in (("q", qa), ("qd", qda)):
-            if arr.shape != (self.n,):
-                raise StateError(
-                    f"`{name}` must have shape ({self.n},) for coordinates "
-                    f"{', '.join(self.coordinate_names[:6])}{'...' if self.n > 6 else ''}; "
-                    f"got shape {arr.shape}"
-                )
-            if not np.all(np.isfinite(arr)):
-                raise StateError(f"`{name}` contains NaN or infinity")
-        if not np.isfinite(tt):
-            raise StateError("`t` is not finite")
-        return tt, qa, qda
+        return check_state(t, q, qd, self.n, self.coordinate_names)
 
     # ------------------------------------------------------------------ raw evaluation
     def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

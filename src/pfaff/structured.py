@@ -28,8 +28,9 @@ import numpy as np
 import scipy.sparse as sps
 
 from .codegen import constraint_layout, energy_exprs
-from .errors import ModelError, StateError
+from .errors import ModelError
 from .family import LazySeq
+from .numeric import check_state
 from .solvers import SparseSolver, TriangularSolver, triangular_plan
 from .streams import Index, StreamKernel, add_product, indices, scatter_add, take
 
@@ -147,20 +148,7 @@ class StructuredModel:
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
-        try:
-            tt = float(t)
-            qa = np.asarray(q, dtype=float)
-            qda = np.asarray(qd, dtype=float)
-        except (TypeError, ValueError) as e:
-            raise StateError(f"`t`, `q` and `qd` must be real numbers and arrays: {e}") from e
-        for name, arr in (("q", qa), ("qd", qda)):
-            if arr.shape != (self.n,):
-                raise StateError(f"`{name}` must have shape ({self.n},), got shape {arr.shape}")
-            if not np.isfinite(arr).all():
-                raise StateError(f"`{name}` contains NaN or infinity")
-        if not np.isfinite(tt):
-            raise StateError("`t` is not finite")
-        return tt, qa, qda
+        return check_state(t, q, qd, self.n)
 
     # ------------------------------------------------------------------ raw evaluation
     def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, np.ndarray]:
