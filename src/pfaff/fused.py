@@ -44,19 +44,20 @@ class FusedKernel:
         for LAPACK (the ODE right-hand side of small systems).
     ofn, sfn : callable
         ``ofn`` (same arguments as ``kfn``) gives the flat [M entries, A entries, Q − h, c] and
-        ``sfn(*that)`` q̈ by straight-line Schur-complement code (:mod:`pfaff.smallsolve`).
-    pfn : callable
-        ``pfn(t, q.., qd.., *params) -> [A (nested lists), f, A q̇ + b, diag M]`` for projection.
+        ``sfn(*that, floor)`` q̈ by straight-line Schur-complement code with the pivots of
+        A M⁻¹Aᵀ floored (:mod:`pfaff.smallsolve`, :mod:`pfaff.kkt`).
     qfn, cfn : callable
-        The same as flat lists for small-system projection in plain Python:
-        ``qfn(...) -> [diag M..., A entries..., f..., g...]`` and
-        ``cfn(*diag, *A entries, *zeros(n), *r, shift) -> D⁻¹Aᵀ(A D⁻¹Aᵀ + δ²I)⁻¹ r``.
+        Small-system projection in plain Python:
+        ``qfn(t, q.., qd.., *params) -> [M entries..., A entries..., f..., g...]`` and
+        ``cfn(*M entries, *A entries, *zeros(n), *r, shift) -> M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²I)⁻¹ r``.
     kkt_index, kkt_source : ndarray of int
         ``K.flat[kkt_index] = out[kkt_source]`` fills the symmetric augmented matrix
         [[M, Aᵀ], [A, 0]] of shape (n+m, n+m).
     offsets : tuple of int
         Start of the forcing, -bias, b and f blocks in the output (forcing and -bias together are
         the right-hand side of the augmented system).
+    arows : tuple of int
+        The row of A of each A entry, in output order.
     """
 
     fn: Callable
@@ -65,12 +66,12 @@ class FusedKernel:
     kfn: Callable
     ofn: Callable
     sfn: Callable
-    pfn: Callable
     qfn: Callable
     cfn: Callable
     kkt_index: np.ndarray
     kkt_source: np.ndarray
     offsets: tuple[int, int, int, int]
+    arows: tuple[int, ...]
 
 
 def _plain(eom: EquationsOfMotion) -> tuple[dict, list[sp.Symbol], list[sp.Symbol]]:
@@ -115,9 +116,9 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
     kfn, ofn = _kkt_function(plain, mass, acon, n, m, args, qds)
-    sfn = schur_solver(n, m, mass, acon)
-    pfn, qfn = _projection_function(plain, mass, acon, n, m, args, qds)
-    cfn = schur_solver(n, m, [(i, i) for i in range(n)], acon, damped=True)
+    sfn = schur_solver(n, m, mass, acon, floor=True)
+    qfn = _projection_function(plain, mass, acon, n, m, args, qds)
+    cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
     index, source = [], []
     for s, (i, j) in enumerate(mass):
@@ -134,12 +135,12 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
         kfn,
         ofn,
         sfn,
-        pfn,
         qfn,
         cfn,
         np.array(index, dtype=np.int64),
         np.array(source, dtype=np.int64),
         (off, off + n, off + n + m, off + n + 2 * m),
+        tuple(i for i, _ in acon),
     )
 
 
@@ -173,19 +174,12 @@ def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: lis
 
 def _projection_function(
     plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list
-):
-    """Generate ``pfn`` (see :class:`FusedKernel`)."""
+) -> Callable:
+    """Generate ``qfn`` (see :class:`FusedKernel`)."""
+    nA = len(mass) + len(acon)
     A = [[sp.S.Zero] * n for _ in range(m)]
     for s, (i, j) in enumerate(acon, start=len(mass)):
         A[i][j] = plain[s]
-    off = len(mass) + len(acon)
-    b, f = plain[off + n + m : off + n + 2 * m], plain[off + n + 2 * m :]
+    b, f = plain[nA + n + m : nA + n + 2 * m], plain[nA + n + 2 * m :]
     g = [sum((A[i][j] * qds[j] for j in range(n)), b[i]) for i in range(m)]
-    d = [sp.S.Zero] * n
-    for s, (i, j) in enumerate(mass):
-        if i == j:
-            d[i] = plain[s]
-    pfn = sp.lambdify(args, [A, f, g, d], modules="math", cse=True, docstring_limit=0)
-    flat = d + [A[i][j] for i, j in acon] + list(f) + g
-    qfn = sp.lambdify(args, flat, modules="math", cse=True, docstring_limit=0)
-    return pfn, qfn
+    return sp.lambdify(args, plain[:nA] + list(f) + g, modules="math", cse=True, docstring_limit=0)

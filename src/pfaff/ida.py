@@ -9,10 +9,11 @@ Unknowns y = [q, v, λ, μ] (μ one per position constraint), residuals (Gear–
 
 λ and μ are algebraic: they are marked so for IDA and left out of its error test (a huge absolute
 tolerance), as the index-2 theory asks. Consistent initial values are computed: q and v projected,
-λ from the KKT solve, μ = 0, y' = [v, q̈, 0, 0]. The Newton matrix is SUNDIALS' finite-difference
-one for small systems (exact: on the pendulum 5x fewer steps than an approximate one); for larger
-ones it is assembled from M and A (∂/∂y' and the constraint blocks; the curvature terms ∂(Aᵀλ)/∂q
-and ∂(A v)/∂q are left out, so Newton converges more slowly but each iteration stays cheap).
+λ from the KKT solve, μ = 0, y' = [v, q̈, 0, 0]. The Newton matrix is our own (``_jacobian``):
+exact blocks for λ, μ and y', forward differences for the q and v columns of small systems (on the
+pendulum 5x fewer steps than leaving the curvature terms ∂(Aᵀλ)/∂q and ∂(A v)/∂q out, which larger
+systems do to keep each iteration cheap), and a small regularization of the algebraic diagonal so
+that it stays invertible where a linkage folds flat and A loses rank.
 """
 
 from __future__ import annotations
@@ -22,7 +23,11 @@ from typing import Any
 import numpy as np
 
 from .errors import PfaffError
+from .kkt import FLOOR
 
+SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
+STALL_STEPS = 200  # consecutive steps shorter than STALL_FRACTION of the span: a stall
+STALL_FRACTION = 1e-10
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
 
 
@@ -42,6 +47,7 @@ class IDAStepper:
         mh = len(self.hrows)
         self.n, self.m, self.mh = n, m, mh
         self.size = 2 * n + m + mh
+        self.fd = self._finite_differences(opts)
         alg = list(range(2 * n, self.size))
         atol = np.full(self.size, float(opts["atol"]))
         atol[alg] = 1e12  # algebraic variables: out of the error test
@@ -51,7 +57,7 @@ class IDAStepper:
             rtol=float(opts["rtol"]),
             atol=atol,
             algebraic_idx=alg or None,
-            jacfn=self._jacobian if self._analytic(opts) else None,
+            jacfn=self._jacobian,
             max_num_steps=1_000_000,
             **kw,
         )
@@ -59,15 +65,17 @@ class IDAStepper:
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
         self.t_end = t_end
+        self._tiny_step = STALL_FRACTION * max(abs(t_end - t0), 1e-300)
+        self._tiny_count = 0
         res = self.solver.init_step(t0, y0, yp0)
         self._check(res)
         self._last = res
         self.stats = {"steps": 0, "rejected": None, "nfev": 0, "njev": 0}
 
-    def _analytic(self, opts: dict) -> bool:
-        """Finite differences (SUNDIALS') for small systems: exact, and a handful of residuals."""
+    def _finite_differences(self, opts: dict) -> bool:
+        """Difference columns for small systems: exact, and 2n residuals per Newton matrix."""
         choice = opts.get("ida_jacobian") or ("fd" if self.size <= FD_LIMIT else "approximate")
-        return choice != "fd"
+        return choice == "fd"
 
     # ------------------------------------------------------------------ residual and Newton matrix
     def _blocks(self, t: float, y: np.ndarray) -> tuple:
@@ -89,18 +97,44 @@ class IDAStepper:
         res[2 * n + m :] = f[self.hrows]
 
     def _jacobian(self, t, y, yp, res, cj, JJ) -> None:
-        n, m = self.n, self.m
+        """Newton matrix ∂F/∂y + cj ∂F/∂y', regularized where A loses rank.
+
+        The λ and μ columns and the y' part are exact (−Aᵀ, −A_hᵀ, cj·I, cj·M). The q and v
+        columns come from forward differences of the residual ("fd") or from M and A alone
+        ("approximate", no curvature terms). The diagonal blocks (g, λ) and (f, μ) get
+        ε = FLOOR · max diag(A M⁻¹Aᵀ) / cj (and the same for A_h A_hᵀ): it leaves a
+        well-conditioned Newton matrix practically unchanged and keeps it invertible where a
+        linkage folds flat, so that Newton still converges in every other direction (λ and μ
+        are outside the error test, so the collapsing multiplier's slow convergence is harmless).
+        """
+        n, m, mh = self.n, self.m, self.mh
         M, A, *_ = self._blocks(t, y)
         Ah = A[self.hrows]
         JJ[:, :] = 0.0
         idx = np.arange(n)
-        JJ[idx, idx] = cj
-        JJ[idx, n + idx] = -1.0
+        if self.fd:
+            tmp = np.empty(self.size)
+            for j in range(2 * n):  # ∂F/∂q and ∂F/∂v by forward differences
+                h = SQRT_EPS * max(abs(y[j]), 1.0)
+                yj = y.copy()
+                yj[j] += h
+                self._residual(t, yj, yp, tmp)
+                JJ[:, j] = (tmp - res) / h
+        else:
+            JJ[idx, n + idx] = -1.0
+            JJ[2 * n : 2 * n + m, n : 2 * n] = A
+            JJ[2 * n + m :, :n] = Ah
+        JJ[idx, idx] += cj
+        JJ[n : 2 * n, n : 2 * n] += cj * M
         JJ[:n, 2 * n + m :] = -Ah.T
-        JJ[n : 2 * n, n : 2 * n] = cj * M
         JJ[n : 2 * n, 2 * n : 2 * n + m] = -A.T
-        JJ[2 * n : 2 * n + m, n : 2 * n] = A
-        JJ[2 * n + m :, :n] = Ah
+        if m:
+            Z = np.linalg.solve(M, A.T) if n else A.T
+            eps = FLOOR * float(np.max(np.einsum("ij,ji->i", A, Z))) / cj
+            JJ[2 * n + np.arange(m), 2 * n + np.arange(m)] = eps
+        if mh:
+            eps = FLOOR * float(np.max(np.einsum("ij,ij->i", Ah, Ah))) / cj
+            JJ[2 * n + m + np.arange(mh), 2 * n + m + np.arange(mh)] = eps
 
     # ------------------------------------------------------------------ stepping contract
     def _check(self, res: Any) -> None:
@@ -116,9 +150,17 @@ class IDAStepper:
         return y[: self.n].copy(), y[self.n : 2 * self.n].copy()
 
     def step(self) -> None:
+        t_before = self.t
         res = self.solver.step(self.t_end, method="onestep", tstop=self.t_end)
         self._check(res)
         self._last = res
+        self._tiny_count = self._tiny_count + 1 if self.t - t_before < self._tiny_step else 0
+        if self._tiny_count >= STALL_STEPS:
+            raise PfaffError(
+                f"IDA stalled at t = {self.t:.17g}: {STALL_STEPS} steps in a row shorter than "
+                f"{self._tiny_step:.3g}. This happens where the constraint Jacobian loses rank (a "
+                "linkage folding flat); method='projection' passes such configurations"
+            )
         self.stats["steps"] += 1
         self.stats["nfev"] = int(res.nfev)
         self.stats["njev"] = int(res.njev)

@@ -22,6 +22,7 @@ import scipy.sparse.linalg as spla
 
 from .codegen import Kernel
 from .errors import ConstraintError, StateError
+from .kkt import FLOOR, STATE_FLOOR, solve_floored
 
 if TYPE_CHECKING:
     from .fused import FusedKernel
@@ -229,22 +230,45 @@ class NumericModel:
             )
         return K, forcing, b, bias, f, g
 
-    def _solve_kkt(self, K: np.ndarray | sps.csc_matrix, rhs: np.ndarray, t: float) -> np.ndarray:
-        """Solve K x = rhs; a rank-deficient dense K gets the minimum-norm least-squares solution."""
+    def _solve_kkt(
+        self,
+        K: np.ndarray | sps.csc_matrix,
+        forcing: np.ndarray,
+        c: np.ndarray,
+        t: float,
+        floor: float = STATE_FLOOR,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """q̈ and λ of K [q̈; −λ] = [Q − h; c].
+
+        Dense systems take the range-space solve of :mod:`pfaff.kkt`, which passes configurations
+        where A loses rank (a linkage folded flat); a singular M (a coordinate without inertia)
+        goes to LAPACK gesv on K, then to least squares. Sparse systems go to SuperLU. ``floor``:
+        see :mod:`pfaff.kkt` (``FLOOR`` in integrators, ``STATE_FLOOR`` for single states).
+        """
         self.stats["kkt_solves"] += 1
+        n = self.n
         try:
             if self.dense:
-                # LAPACK gesv straight: np.linalg.solve's checks cost 4x the solve of a 3x3 system
-                sol, info = _gesv(K, rhs)[2:]
-                if info != 0:
-                    sol = self._least_squares(K, rhs, t)
+                try:
+                    qdd, lam = solve_floored(K[:n, :n], K[n:, :n], forcing, c, floor)
+                except np.linalg.LinAlgError:
+                    qdd, lam = self._solve_full(K, np.concatenate([forcing, c]), t)
             else:
-                sol = spla.splu(K).solve(rhs)
+                sol = spla.splu(K).solve(np.concatenate([forcing, c]))
+                qdd, lam = sol[:n], -sol[n:]
         except (np.linalg.LinAlgError, RuntimeError, ValueError) as e:
             raise ConstraintError(self._singular_message(t)) from e
-        if not math.isfinite(sol.sum()):
+        if not math.isfinite(qdd.sum() + lam.sum()):
             raise ConstraintError(self._singular_message(t))
-        return sol
+        return qdd, lam
+
+    def _solve_full(self, K: np.ndarray, rhs: np.ndarray, t: float) -> tuple:
+        """q̈, λ from the whole dense augmented matrix (LAPACK gesv, then least squares)."""
+        # LAPACK gesv straight: np.linalg.solve's checks cost 4x the solve of a 3x3 system
+        sol, info = _gesv(K, rhs)[2:]
+        if info != 0:
+            sol = self._least_squares(K, rhs, t)
+        return sol[: self.n], -sol[self.n :]
 
     def _least_squares(self, K: np.ndarray, rhs: np.ndarray, t: float) -> np.ndarray:
         """Rank-deficient K: redundant constraints at this configuration (a linkage folded flat).
@@ -268,10 +292,16 @@ class NumericModel:
         return sol
 
     def _solve_accelerations(
-        self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
+        self,
+        t: float,
+        q: np.ndarray,
+        qd: np.ndarray,
+        alpha: float = 0.0,
+        beta: float = 0.0,
+        floor: float = STATE_FLOOR,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f."""
-        if self._fused is not None and not (alpha or beta):
+        if self._fused is not None and not (alpha or beta) and floor == STATE_FLOOR:
             return self._fused_accelerations(t, q, qd)
         K, forcing, _, bias, f, g = self._kkt(t, q, qd)
         c = -bias
@@ -279,8 +309,7 @@ class NumericModel:
             c = c - 2.0 * alpha * g
         if beta:
             c = c - beta * beta * f
-        sol = self._solve_kkt(K, np.concatenate([forcing, c]), t)
-        return sol[: self.n], -sol[self.n :]
+        return self._solve_kkt(K, forcing, c, t, floor)
 
     def _ode_function(self, alpha: float = 0.0, beta: float = 0.0):
         """y' = [q̇, q̈] of y = [q, q̇] (Baumgarte-stabilized when α, β > 0), for integrators.
@@ -296,24 +325,24 @@ class NumericModel:
             def fun(t: float, y: np.ndarray) -> np.ndarray:
                 out = np.empty(2 * n)
                 out[:n] = y[n:]
-                out[n:] = solve(t, y[:n], y[n:], alpha, beta)[0]
+                out[n:] = solve(t, y[:n], y[n:], alpha, beta, FLOOR)[0]
                 if not math.isfinite(out.sum()):
                     raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
                 return out
 
             return fun
         kfn, ofn, sfn, p, gesv = fk.kfn, fk.ofn, fk.sfn, (*self._p, alpha, beta), _gesv
-        isfinite = math.isfinite
+        isfinite, floor = math.isfinite, FLOOR
 
         def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
             yl = y.tolist()
             try:
-                qdd = sfn(*ofn(t, *yl, *p))
-            except (ValueError, ZeroDivisionError):  # M or A M⁻¹Aᵀ not definite: LAPACK
+                qdd = sfn(*ofn(t, *yl, *p), floor)
+            except (ValueError, ZeroDivisionError):  # M not definite: LAPACK on the whole K
                 K, r = kfn(t, *yl, *p)
                 x, info = gesv(K, r)[2:]
-                if info != 0:  # a redundant configuration: the careful path
-                    x = self._solve_kkt(np.array(K), np.array(r), t)
+                if info != 0:  # singular: the careful path
+                    x = self._solve_full(np.array(K), np.array(r), t)[0]
                 qdd = x[:n].tolist()
             if not isfinite(sum(qdd)):
                 raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
@@ -325,12 +354,12 @@ class NumericModel:
         self, t: float, q: np.ndarray, qd: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         # the hot path of small systems: every NumPy call here costs about a microsecond
-        fk, n, N = self._fused, self.n, self.n + self.m
+        fk, N = self._fused, self.n + self.m
         v = np.array(fk.fn(t, *q.tolist(), *qd.tolist(), *self._p))
         K = np.zeros((N, N))
         K.flat[fk.kkt_index] = v[fk.kkt_source]
-        sol = self._solve_kkt(K, v[fk.offsets[0] : fk.offsets[2]], t)
-        return sol[:n], -sol[n:]
+        o = fk.offsets
+        return self._solve_kkt(K, v[o[0] : o[1]], v[o[1] : o[2]], t)
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
@@ -402,8 +431,10 @@ class NumericModel:
         K[:, fk.kkt_index] = vals[:, fk.kkt_source]
         K = K.reshape(k, N, N)
         o = fk.offsets
-        sol = np.linalg.solve(K, vals[:, o[0] : o[2], None])[..., 0]
-        if not np.isfinite(sol).all():
+        qdd, lam = solve_floored(
+            K[:, :n, :n], K[:, n:, :n], vals[:, o[0] : o[1]], vals[:, o[1] : o[2]], STATE_FLOOR
+        )
+        if not (np.isfinite(qdd).all() and np.isfinite(lam).all()):
             raise ConstraintError(self._singular_message(float(t[0])))
         g = np.einsum("kij,kj->ki", K[:, n:, :n], qd) + vals[:, o[2] : o[3]]
         T, V, T0 = (np.broadcast_to(e, (k,)).astype(float) for e in fk.efn(*args))
@@ -411,8 +442,8 @@ class NumericModel:
         T2 = 0.5 * (T + Tneg) - T0
         self.stats["kkt_solves"] += k
         return {
-            "qdd": sol[:, :n],
-            "multipliers": -sol[:, n:],
+            "qdd": qdd,
+            "multipliers": lam,
             "f": vals[:, o[3] :],
             "g": g,
             "T": T,

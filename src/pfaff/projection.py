@@ -1,21 +1,25 @@
 """Coordinate projection onto the constraint manifold f(q, t) = 0, A(q, t) q̇ + b = 0.
 
-A state off the manifold is moved to the nearest state on it in the metric of the mass matrix's
-diagonal D (so that lengths and angles are weighed by their inertia):
+A state off the manifold is moved to the nearest state on it in the metric of the mass matrix
+(a mass-orthogonal projection: the velocity correction is the impulse the constraints would apply,
+and it removes kinetic energy only from the forbidden directions):
 
-    position:  Δq = −D⁻¹Aᵀ (A D⁻¹Aᵀ + δ²I)⁻¹ f,   Newton-iterated until |f| <= tol
-    velocity:  Δq̇ = −D⁻¹Aᵀ (A D⁻¹Aᵀ + δ²I)⁻¹ (A q̇ + b)
+    position:  Δq = −W⁻¹Aᵀ (A W⁻¹Aᵀ + δ²I)⁻¹ f,   Newton-iterated until |f| <= tol
+    velocity:  Δq̇ = −W⁻¹Aᵀ (A W⁻¹Aᵀ + δ²I)⁻¹ (A q̇ + b)
 
-The damping δ = 1e-7 σ_max (Tikhonov: the pseudo-inverse of A D^{-1/2} with filter factors
-σ/(σ² + δ²)) matters only where the constraint Jacobian loses rank — a linkage folded flat: there
-the correction along the degenerate direction stays bounded. (This does not keep a linkage on its
-branch through a fold: the acceleration-level KKT solve itself is singular there; see the xfail
-tests in tests/test_simulate_fourbar.py.) Dense matrices go to LAPACK, sparse ones to SuperLU. A model may supply its own
+with W = M. A singular M (a coordinate without inertia) is replaced by M + κAᵀA, which gives the
+same projection when M is definite on the admissible motions; large sparse models use the
+diagonal of M. The damping δ = 1e-7 σ_max (Tikhonov) matters only where the constraint Jacobian
+loses rank — a linkage folded flat: there the correction along the collapsing direction stays
+bounded, and once the linkage has passed the fold the mass-orthogonal projection restores the
+constraint impulse that the floored acceleration solve (:mod:`pfaff.kkt`) softened. Dense
+matrices go to LAPACK, sparse ones to SuperLU. A model may supply its own
 ``project(t, q, qd, tol=, max_iter=)`` (structured O(N) solvers do).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -24,26 +28,49 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 DAMPING = 1e-7  # δ / σ_max
+SHRUNK = 1e-4  # smallest relative row norm that tightens a row's residual test
 q_arr = np.array
 _gesv = scipy.linalg.lapack.dgesv
 
 
-def _correction(A: np.ndarray | sps.spmatrix, d: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """D⁻¹Aᵀ (A D⁻¹ Aᵀ + δ²I)⁻¹ r: the damped minimum-D-norm Δ with A Δ ≈ r."""
-    if sps.issparse(A):
-        A = sps.csr_matrix(A)
-        Ad = A @ sps.diags(1.0 / d)
-        G = (Ad @ A.T).tocsc()
-        delta2 = DAMPING**2 * max(G.diagonal().max(initial=0.0), 1e-300)
-        lu = spla.splu((G + delta2 * sps.identity(G.shape[0], format="csc")).tocsc())
-        return Ad.T @ lu.solve(r)
-    Ad = A / d
-    G = Ad @ A.T
+def _damped_solve(G: np.ndarray, r: np.ndarray) -> np.ndarray:
+    G = G.copy()
     G.flat[:: G.shape[0] + 1] += DAMPING**2 * max(G.trace(), 1e-300)
     y, info = _gesv(G, r)[2:]
     if info != 0:
         y = np.linalg.lstsq(G, r, rcond=None)[0]
-    return Ad.T @ y
+    return y
+
+
+def _correction(A: np.ndarray | sps.spmatrix, W: Any, r: np.ndarray) -> np.ndarray:
+    """W⁻¹Aᵀ (A W⁻¹ Aᵀ + δ²I)⁻¹ r: the damped minimum-W-norm Δ with A Δ ≈ r.
+
+    ``W`` is a 1-D diagonal (sparse A) or a Cholesky factor from :func:`_metric` (dense A).
+    """
+    if sps.issparse(A):
+        A = sps.csr_matrix(A)
+        Ad = A @ sps.diags(1.0 / W)
+        G = (Ad @ A.T).tocsc()
+        delta2 = DAMPING**2 * max(G.diagonal().max(initial=0.0), 1e-300)
+        lu = spla.splu((G + delta2 * sps.identity(G.shape[0], format="csc")).tocsc())
+        return Ad.T @ lu.solve(r)
+    Z = scipy.linalg.cho_solve(W, A.T)
+    return Z @ _damped_solve(A @ Z, r)
+
+
+def _metric(M: np.ndarray, A: np.ndarray) -> tuple:
+    """Cholesky factor of the projection metric: M, or M + κAᵀA if M is singular, or diag."""
+    try:
+        return scipy.linalg.cho_factor(M)
+    except np.linalg.LinAlgError:
+        pass
+    kappa = max(np.trace(M), 1.0) / max(float(np.sum(A * A)), 1e-300)
+    try:
+        return scipy.linalg.cho_factor(M + kappa * A.T @ A)
+    except np.linalg.LinAlgError:
+        d = np.diag(M).copy()
+        d[~(d > 0)] = 1.0  # a coordinate without inertia of its own: unit weight
+        return scipy.linalg.cho_factor(np.diag(d))
 
 
 def residuals(model: Any, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -80,26 +107,28 @@ class Projector:
         self.stats = {"projections": 0, "projection_iterations": 0}
 
     def _matrices(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
-        fk = getattr(self.model, "_fused", None)
-        if fk is not None:
-            A, f, g, d = fk.pfn(t, *q.tolist(), *qd.tolist(), *self.model._p)
-            d = np.array(d)
-            d[~(d > 0)] = 1.0
-            return np.array(A), d, np.array(f), np.array(g)
+        """A, the metric (see :func:`_correction`), f (holonomic rows) and g at a state."""
         K, _, _, _, f, g = self.model._kkt(t, q, qd)
         n = self.model.n
         if sps.issparse(K):
             K = sps.csr_matrix(K)
             d, A = K[:n, :n].diagonal(), K[n:, :n]
+            d[~(d > 0)] = 1.0  # a coordinate without inertia of its own: unit weight
+            W: Any = d
         else:
-            d, A = np.diag(K)[:n].copy(), K[n:, :n]
-        d[~(d > 0)] = 1.0  # a coordinate without inertia of its own: unit weight
-        return A, d, np.where(self.holonomic, f, 0.0), g
+            A = K[n:, :n]
+            W = _metric(K[:n, :n], A)
+        return A, W, np.where(self.holonomic, f, 0.0), g
 
     def __call__(
         self, t: float, q: np.ndarray, qd: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, bool]:
-        """The projected (q, qd) and whether anything changed."""
+        """The projected (q, qd) and whether anything changed.
+
+        The test is per row: |f_i| and |g_i| at most tol·w_i, w_i = clip(|A_i| / max_j |A_j|,
+        1e-4, 1). A row that has shrunk (a linkage close to a fold) is held tighter, since the
+        same residual there stands for a larger step off the branch.
+        """
         if self.model.m == 0:
             return q, qd, False
         if self.custom is not None:
@@ -111,42 +140,61 @@ class Projector:
             out = self._small(fk, t, q.tolist(), qd.tolist())
             if out is not None:
                 return out
-        A, d, f, g = self._matrices(t, q, qd)
-        if max(np.abs(f).max(), np.abs(g).max()) <= self.tol:
+        A, W, f, g = self._matrices(t, q, qd)
+        thr = self._thresholds(A)
+        if max(np.max(np.abs(f) / thr), np.max(np.abs(g) / thr)) <= 1.0:
             return q, qd, False
         q, qd = q.copy(), qd.copy()
         it, last = 0, np.inf
-        while (err := np.abs(f).max()) > self.tol and it < self.max_iter and err < last:
-            q -= _correction(A, d, f)  # Newton, with the Jacobian at the current q
+        while (err := np.max(np.abs(f) / thr)) > 1.0 and it < self.max_iter and err < last:
+            q -= _correction(A, W, f)  # Newton, with the Jacobian at the current q
             it, last = it + 1, err
-            A, d, f, g = self._matrices(t, q, qd)
-        if np.abs(g).max() > self.tol:
-            qd -= _correction(A, d, g)  # exact up to the damping: g is linear in q̇
+            A, W, f, g = self._matrices(t, q, qd)
+        if np.max(np.abs(g) / thr) > 1.0:
+            qd -= _correction(A, W, g)  # exact up to the damping: g is linear in q̇
         self._count(max(it, 1))
         return q, qd, True
 
+    def _thresholds(self, A: np.ndarray | sps.spmatrix) -> np.ndarray:
+        """tol · clip(|A_i| / max_j |A_j|, 1e-4, 1) per row."""
+        sq = np.asarray(A.multiply(A).sum(axis=1)).ravel() if sps.issparse(A) else (A * A).sum(1)
+        norms = np.sqrt(sq)
+        return self.tol * np.clip(norms / max(norms.max(), 1e-300), SHRUNK, 1.0)
+
     def _small(self, fk: Any, t: float, q: list, qd: list) -> tuple | None:
-        """The projection of a fused small model; None to take the general path (rank loss)."""
+        """The projection of a fused small model; None to take the general path (M singular)."""
         n, m, p, tol = self.model.n, self.model.m, self.model._p, self.tol
+        rows = fk.arows
+        nMA = fk.offsets[0]  # qfn: M and A entries first, then f and g
+
+        def excess(v: list) -> tuple[float, float]:
+            sq = [0.0] * m
+            for i, a in zip(rows, v[nMA - len(rows) : nMA], strict=True):
+                sq[i] += a * a
+            top = max(sq) or 1e-300
+            thr = [tol * min(1.0, max(SHRUNK, math.sqrt(x / top))) for x in sq]
+            f, g = v[nMA : nMA + m], v[nMA + m :]
+            return (
+                max(abs(a) / b for a, b in zip(f, thr, strict=True)),
+                max(abs(a) / b for a, b in zip(g, thr, strict=True)),
+            )
+
         v = fk.qfn(t, *q, *qd, *p)
-        nA = len(v) - n - 2 * m
-        f, g = v[n + nA : n + nA + m], v[n + nA + m :]
-        if max(map(abs, f + g)) <= tol:
+        ef, eg = excess(v)
+        if max(ef, eg) <= 1.0:
             return q_arr(q), q_arr(qd), False
         zeros = [0.0] * n
         shift = DAMPING**2
-        it = 0
+        it, last = 0, math.inf
         try:
-            while max(map(abs, f)) > tol and it < self.max_iter:
-                d = [x if x > 0 else 1.0 for x in v[:n]]
-                dq = fk.cfn(*d, *v[n : n + nA], *zeros, *f, shift)
+            while ef > 1.0 and it < self.max_iter and ef < last:
+                dq = fk.cfn(*v[:nMA], *zeros, *v[nMA : nMA + m], shift)
                 q = [a - b for a, b in zip(q, dq, strict=True)]
-                it += 1
+                it, last = it + 1, ef
                 v = fk.qfn(t, *q, *qd, *p)
-                f, g = v[n + nA : n + nA + m], v[n + nA + m :]
-            if max(map(abs, g)) > tol:
-                d = [x if x > 0 else 1.0 for x in v[:n]]
-                dv = fk.cfn(*d, *v[n : n + nA], *zeros, *g, shift)
+                ef, eg = excess(v)
+            if eg > 1.0:
+                dv = fk.cfn(*v[:nMA], *zeros, *v[nMA + m :], shift)
                 qd = [a - b for a, b in zip(qd, dv, strict=True)]
         except (ValueError, ZeroDivisionError):
             return None

@@ -7,9 +7,14 @@ This module writes a Python function, once per model, that solves
 
 by the range-space (Schur complement) method on floats: Cholesky M = L Lᵀ, y = M⁻¹F,
 Z = M⁻¹Aᵀ, S = A Z, Cholesky of S, λ = S⁻¹(c − A y), q̈ = y + Z λ. Structural zeros of M and A
-are skipped, so a diagonal M costs n divisions. When M or S is not positive definite (a coordinate
-without inertia, constraints redundant at this configuration) the function raises ``ValueError``
-or ``ZeroDivisionError`` and the caller falls back to the general LAPACK/least-squares path.
+are skipped, so a diagonal M costs n divisions. When M is not positive definite (a coordinate
+without inertia) the function raises ``ValueError`` or ``ZeroDivisionError`` and the caller falls
+back to the general path.
+
+Where the constraint Jacobian loses rank (a linkage folded flat) S becomes singular. With
+``floor=True`` each pivot d of its Cholesky factorization is replaced by :func:`floored` (d, τ),
+τ = ``tau`` · max diag S: unchanged when d >= τ, a smooth floor of at least τ/2 below. Only the
+collapsing direction is affected (see :mod:`pfaff.kkt`).
 """
 
 from __future__ import annotations
@@ -18,6 +23,20 @@ import math
 from collections.abc import Callable
 
 Entry = str | None  # a variable name, or None for a structural zero
+
+
+def floored(d: float, tau: float) -> float:
+    """The pivot floor: d where d >= τ, else τ/2 + d²/(2τ) (C¹, at least τ/2; d < 0 counts as 0).
+
+    Examples
+    --------
+    >>> floored(3.0, 1.0), floored(0.0, 1.0), floored(-5.0, 1.0)
+    (3.0, 0.5, 0.5)
+    """
+    if d >= tau:
+        return d
+    d = max(d, 0.0)
+    return 0.5 * tau + d * d / (2.0 * tau)
 
 
 def _dot(pairs: list[tuple[Entry, Entry]]) -> str | None:
@@ -38,7 +57,8 @@ class _Writer:
         self.lines.append(f"    {name} = {expr}")
         return name
 
-    def cholesky(self, S: list[list[Entry]]) -> list[list[Entry]]:
+    def cholesky(self, S: list[list[Entry]], tau: str | None = None) -> list[list[Entry]]:
+        """Cholesky factor of S; with ``tau`` (a variable name) the pivots are floored at it."""
         k = len(S)
         L: list[list[Entry]] = [[None] * k for _ in range(k)]
         for j in range(k):
@@ -46,6 +66,9 @@ class _Writer:
             diag = S[j][j] or "0.0"
             if acc is not None:
                 diag = f"{diag} - ({acc})"
+            if tau:  # the common case d >= τ costs one comparison, no call
+                d = self.let(diag)
+                diag = f"{d} if {d} >= {tau} else floored({d}, {tau})"
             L[j][j] = self.let(f"sqrt({diag})")
             for i in range(j + 1, k):
                 acc = _dot([(L[i][p], L[j][p]) for p in range(j)])
@@ -84,11 +107,14 @@ def schur_solver(
     acon: list[tuple[int, int]],
     *,
     damped: bool = False,
+    floor: bool = False,
 ) -> Callable[..., list[float]]:
     """Generate ``solve(*mass_values, *A_values, *F, *c) -> q̈ (list of n floats)``.
 
     With ``damped=True`` the function takes one more argument ``shift`` and solves with
-    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.projection`).
+    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.projection`). With
+    ``floor=True`` it takes one more argument ``tau`` and floors the pivots of S at
+    tau · max diag S (accelerations through rank loss, :mod:`pfaff.kkt`).
 
     Parameters
     ----------
@@ -125,18 +151,22 @@ def schur_solver(
         tr = w.let(f"shift * ({' + '.join(S[i][i] or '0.0' for i in range(m))})")
         for i in range(m):
             S[i][i] = w.let(f"{S[i][i] or '0.0'} + {tr}")
+    tau = None
+    if floor and m:
+        diag = ", ".join(S[i][i] or "0.0" for i in range(m))
+        tau = w.let(f"tau * max({diag})" if m > 1 else f"tau * {diag}")
     r = []
     for i in range(m):
         acc = _dot(list(zip(A[i], y, strict=True)))
         r.append(w.let(f"{cs[i]} - ({acc})" if acc else cs[i]))
-    lam = w.solve(w.cholesky(S), r) if m else []
+    lam = w.solve(w.cholesky(S, tau), r) if m else []
     out = []
     for i in range(n):
         acc = _dot([(Z[k][i], lam[k]) for k in range(m)])
         terms = [x for x in (y[i], acc) if x is not None]
         out.append(" + ".join(terms) if terms else "0.0")
-    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []))
+    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []) + (["tau"] if floor else []))
     src = f"def solve({args}):\n" + "\n".join(w.lines) + f"\n    return [{', '.join(out)}]\n"
-    namespace: dict = {"sqrt": math.sqrt}
+    namespace: dict = {"sqrt": math.sqrt, "floored": floored}
     exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
     return namespace["solve"]
