@@ -191,8 +191,8 @@ def test_ctrl_c_returns_partial(pendulum, monkeypatch) -> None:
     calls = {"n": 0}
     real = integrators.acceleration_field
 
-    def interrupting(model, alpha=0.0, beta=0.0):
-        fun = real(model, alpha, beta)
+    def interrupting(model, alpha=0.0, beta=0.0, start=None):
+        fun = real(model, alpha, beta, start)
 
         def wrapped(t, y):
             calls["n"] += 1

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 from .errors import PfaffError
-from .kkt import FLOOR
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
+REGULARIZATION = 1e-8  # ε / (max diag A M⁻¹Aᵀ / cj) on the algebraic diagonal
 STALL_STEPS = 200  # consecutive steps shorter than STALL_FRACTION of the span: a stall
 STALL_FRACTION = 1e-10
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
@@ -102,7 +102,7 @@ class IDAStepper:
         The λ and μ columns and the y' part are exact (−Aᵀ, −A_hᵀ, cj·I, cj·M). The q and v
         columns come from forward differences of the residual ("fd") or from M and A alone
         ("approximate", no curvature terms). The diagonal blocks (g, λ) and (f, μ) get
-        ε = FLOOR · max diag(A M⁻¹Aᵀ) / cj (and the same for A_h A_hᵀ): it leaves a
+        ε = 1e-8 · max diag(A M⁻¹Aᵀ) / cj (and the same for A_h A_hᵀ): it leaves a
         well-conditioned Newton matrix practically unchanged and keeps it invertible where a
         linkage folds flat, so that Newton still converges in every other direction (λ and μ
         are outside the error test, so the collapsing multiplier's slow convergence is harmless).
@@ -130,10 +130,10 @@ class IDAStepper:
         JJ[n : 2 * n, 2 * n : 2 * n + m] = -A.T
         if m:
             Z = np.linalg.solve(M, A.T) if n else A.T
-            eps = FLOOR * float(np.max(np.einsum("ij,ji->i", A, Z))) / cj
+            eps = REGULARIZATION * float(np.max(np.einsum("ij,ji->i", A, Z))) / cj
             JJ[2 * n + np.arange(m), 2 * n + np.arange(m)] = eps
         if mh:
-            eps = FLOOR * float(np.max(np.einsum("ij,ij->i", Ah, Ah))) / cj
+            eps = REGULARIZATION * float(np.max(np.einsum("ij,ij->i", Ah, Ah))) / cj
             JJ[2 * n + m + np.arange(mh), 2 * n + m + np.arange(mh)] = eps
 
     # ------------------------------------------------------------------ stepping contract

@@ -9,6 +9,8 @@ Two separate ideas share one stepping contract (``t``, ``state()``, ``step()``, 
 - :class:`BaumgarteRK` ("baumgarte") changes the vector field instead: the constraint rows of the
   KKT system ask for A q̈ + Ȧq̇ + ḃ = −2α (A q̇ + b) − β² f, so that the drift obeys a damped
   linear equation rather than growing.
+
+Small fused models run DOP853 on Python floats (:mod:`pfaff.fastrk`), others SciPy's solvers.
 """
 
 from __future__ import annotations
@@ -19,15 +21,23 @@ import numpy as np
 from scipy.integrate import DOP853, RK23, RK45
 
 from .errors import PfaffError, StateError
+from .fastrk import FLOAT_LIMIT, FloatDOP853
 from .projection import Projector
 
 RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
 
 
-def acceleration_field(model: Any, alpha: float = 0.0, beta: float = 0.0):
-    """y' = [q̇, q̈] with y = [q, q̇], q̈ from the (optionally Baumgarte-stabilized) KKT solve."""
+def acceleration_field(
+    model: Any, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None
+):
+    """y' = [q̇, q̈] with y = [q, q̇], q̈ from the (optionally Baumgarte-stabilized) KKT solve.
+
+    ``start`` = (t0, q0, q̇0) sets the reference constraint row sizes of the floor that carries
+    the solve through rank loss (:mod:`pfaff.kkt`).
+    """
     if hasattr(model, "_ode_function"):
-        return model._ode_function(alpha, beta)
+        scales = model._row_scales(*start) if start is not None else None
+        return model._ode_function(alpha, beta, scales)
     n, solve = model.n, model._solve_accelerations
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
@@ -54,9 +64,15 @@ class _RKStepper:
                 f"which can restart from a projected state); got {name!r}"
             )
         kw = {k: opts[k] for k in ("max_step", "first_step") if opts.get(k) is not None}
-        self.solver = RK_METHODS[name](
-            fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], **kw
-        )
+        on_lists = getattr(fun, "on_lists", None)
+        if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
+            self.solver: Any = FloatDOP853(
+                on_lists, fun, t0, y0, t_end, opts["rtol"], opts["atol"], **kw
+            )
+        else:
+            self.solver = RK_METHODS[name](
+                fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], **kw
+            )
         self.fun = fun
         self.n = len(y0) // 2
         self.stats = {"steps": 0, "rejected": 0, "nfev": 0}
@@ -103,7 +119,7 @@ class ProjectedRK(_RKStepper):
     """Runge–Kutta on the acceleration-level ODE with projection after every accepted step."""
 
     def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
-        fun = acceleration_field(model)
+        fun = acceleration_field(model, start=(t0, q0, qd0))
         super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)
         self.projector: Projector = opts["projector"]
 
@@ -125,5 +141,5 @@ class BaumgarteRK(_RKStepper):
 
     def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
         alpha, beta = opts["alpha"], opts["beta"]
-        fun = acceleration_field(model, alpha, beta)
+        fun = acceleration_field(model, alpha, beta, start=(t0, q0, qd0))
         super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)

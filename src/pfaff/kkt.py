@@ -9,19 +9,25 @@ off the constraint manifold into a huge acceleration across the branches, and th
 to another branch. So the eigenvalues (or Cholesky pivots) e of S are floored:
 
     e  ->  e                   where e >= τ,
-           τ/2 + e²/(2τ)       below (C¹, at least τ/2),     τ = FLOOR · max diag S.
+           τ/2 + e²/(2τ)       below (C¹, at least τ/2).
 
 A well-conditioned S is solved exactly; only the collapsing direction is softened, and on the
 manifold its constraint force a·sinθ·λ vanishes with the row anyway.
 
-Two floors are used. The integrators' right-hand side takes ``FLOOR`` = 1e-8: Runge–Kutta stages
-lie off the manifold, and a smaller floor lets their drift through amplified (measured on the
-four-bar of ``tests/test_simulate_fourbar.py``: 1e-10 loses 1e-5 of the angle at rtol = 1e-12,
-1e-8 keeps it to 2e-10); the mass-orthogonal projection after each step
-(:mod:`pfaff.projection`) restores what the softened row missed. A single state asked for by a
-user (``accelerations``, the values a trajectory reports) takes ``STATE_FLOOR`` = 1e-15, at the
-level of rounding: there the exact solve is as accurate as double precision allows
-(an error of about ε·|q̇|²/|row| in q̈ where a row of A has shrunk to |row|).
+Two floors are used.
+
+- The integrators' right-hand side: τ_i = ``FLOOR`` · s_i per constraint row, where s_i is the
+  row's own size A_i M⁻¹ A_iᵀ at the initial state (at least 1e-3 of the largest, see
+  :func:`row_scales`), so that a row is softened only when it has shrunk against itself — not
+  because it belongs to a heavy body or a short link. Runge–Kutta stages lie off the manifold and
+  a small floor lets their drift through amplified: on the four-bar of
+  ``tests/test_simulate_fourbar.py`` at rtol = 5e-13 … 5e-12, FLOOR = 1e-5 kept the angle to
+  4e-12 … 3e-11 through four folds, 1e-6 to 4e-12 … 2e-8, 1e-8 to 7e-9 … 1e-6. The
+  mass-orthogonal projection after each step (:mod:`pfaff.projection`) restores the constraint
+  impulse the softened row missed.
+- A single state asked for by a user (``accelerations``, the values a trajectory reports):
+  τ = ``STATE_FLOOR`` · max diag S at the level of rounding, where the exact solve is as accurate
+  as double precision allows (an error of about ε·|q̇|²/|row| in q̈ where a row has shrunk).
 """
 
 from __future__ import annotations
@@ -29,7 +35,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-FLOOR = 1e-8  # τ / max diag S in the integrators' right-hand side
+FLOOR = 1e-5  # τ_i / s_i in the integrators' right-hand side
+SCALE_FLOOR = 1e-3  # a row's reference size is at least this fraction of the largest
 STATE_FLOOR = 1e-15  # τ / max diag S for a single state
 _potrf = scipy.linalg.lapack.dpotrf
 _potrs = scipy.linalg.lapack.dpotrs
@@ -48,8 +55,25 @@ def floored_array(e: np.ndarray, tau: np.ndarray | float) -> np.ndarray:
     return np.where(e >= tau, e, 0.5 * tau + low * low / (2.0 * np.where(tau > 0, tau, 1.0)))
 
 
+def row_scales(M: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """Reference sizes s_i = A_i M⁻¹ A_iᵀ of the constraint rows, at least 1e-3 of the largest.
+
+    Examples
+    --------
+    >>> row_scales(np.eye(2), np.array([[3.0, 4.0], [0.0, 1e-6]])).tolist()
+    [25.0, 0.025]
+    """
+    d = np.einsum("ij,ji->i", A, np.linalg.solve(M, A.T)) if A.shape[0] else np.zeros(0)
+    return np.maximum(d, SCALE_FLOOR * d.max(initial=0.0))
+
+
 def solve_floored(
-    M: np.ndarray, A: np.ndarray, F: np.ndarray, c: np.ndarray, floor: float = STATE_FLOOR
+    M: np.ndarray,
+    A: np.ndarray,
+    F: np.ndarray,
+    c: np.ndarray,
+    floor: float = STATE_FLOOR,
+    scales: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """q̈ and λ of M q̈ = F + Aᵀλ, A q̈ = c with the eigenvalues of A M⁻¹Aᵀ floored.
 
@@ -63,7 +87,9 @@ def solve_floored(
     c : ndarray, shape (..., m)
         The constraint rows' right-hand side, −(Ȧq̇ + ḃ) (and Baumgarte terms).
     floor : float
-        τ / max diag S.
+        Without ``scales``: τ / max diag S. With them: the floor of diag(s)^(-1/2) S diag(s)^(-1/2).
+    scales : ndarray, shape (m,), optional
+        Reference row sizes (:func:`row_scales`).
 
     Returns
     -------
@@ -96,15 +122,25 @@ def solve_floored(
     S = A @ Z
     S = 0.5 * (S + np.swapaxes(S, -1, -2))
     r = c - np.einsum("...ij,...j->...i", A, y)
-    tau = floor * np.max(np.diagonal(S, axis1=-2, axis2=-1), axis=-1)
+    if scales is not None:
+        w = 1.0 / np.sqrt(scales)
+        S = S * w[:, None] * w[None, :]
+        r = r * w
+        tau = np.full(S.shape[:-2], float(floor))
+    else:
+        w = None
+        tau = floor * np.max(np.diagonal(S, axis1=-2, axis2=-1), axis=-1)
+    lam = None
     if S.ndim == 2:
         chol, info = _potrf(S, lower=1)
         # all pivots well above τ: S is far from singular and is solved exactly
         if info == 0 and np.diagonal(chol).min() ** 2 >= 100.0 * tau:
             lam = _potrs(chol, r, lower=1)[0]
-            return y + Z @ lam, lam
-    e, V = np.linalg.eigh(S)
-    with np.errstate(divide="ignore", invalid="ignore"):  # S = 0: no constraint acts, non-finite
-        w = np.einsum("...ji,...j->...i", V, r) / floored_array(e, tau[..., None])
-    lam = np.einsum("...ij,...j->...i", V, w)
+    if lam is None:
+        e, V = np.linalg.eigh(S)
+        with np.errstate(divide="ignore", invalid="ignore"):  # S = 0: no constraint acts
+            u = np.einsum("...ji,...j->...i", V, r) / floored_array(e, tau[..., None])
+        lam = np.einsum("...ij,...j->...i", V, u)
+    if w is not None:
+        lam = lam * w
     return y + np.einsum("...ij,...j->...i", Z, lam), lam

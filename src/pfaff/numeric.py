@@ -22,7 +22,7 @@ import scipy.sparse.linalg as spla
 
 from .codegen import Kernel
 from .errors import ConstraintError, StateError
-from .kkt import FLOOR, STATE_FLOOR, solve_floored
+from .kkt import FLOOR, STATE_FLOOR, row_scales, solve_floored
 
 if TYPE_CHECKING:
     from .fused import FusedKernel
@@ -237,20 +237,22 @@ class NumericModel:
         c: np.ndarray,
         t: float,
         floor: float = STATE_FLOOR,
+        scales: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """q̈ and λ of K [q̈; −λ] = [Q − h; c].
 
         Dense systems take the range-space solve of :mod:`pfaff.kkt`, which passes configurations
         where A loses rank (a linkage folded flat); a singular M (a coordinate without inertia)
         goes to LAPACK gesv on K, then to least squares. Sparse systems go to SuperLU. ``floor``:
-        see :mod:`pfaff.kkt` (``FLOOR`` in integrators, ``STATE_FLOOR`` for single states).
+        and ``scales``: see :mod:`pfaff.kkt` (``FLOOR`` with row scales in integrators,
+        ``STATE_FLOOR`` for single states).
         """
         self.stats["kkt_solves"] += 1
         n = self.n
         try:
             if self.dense:
                 try:
-                    qdd, lam = solve_floored(K[:n, :n], K[n:, :n], forcing, c, floor)
+                    qdd, lam = solve_floored(K[:n, :n], K[n:, :n], forcing, c, floor, scales)
                 except np.linalg.LinAlgError:
                     qdd, lam = self._solve_full(K, np.concatenate([forcing, c]), t)
             else:
@@ -299,6 +301,7 @@ class NumericModel:
         alpha: float = 0.0,
         beta: float = 0.0,
         floor: float = STATE_FLOOR,
+        scales: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f."""
         if self._fused is not None and not (alpha or beta) and floor == STATE_FLOOR:
@@ -309,13 +312,27 @@ class NumericModel:
             c = c - 2.0 * alpha * g
         if beta:
             c = c - beta * beta * f
-        return self._solve_kkt(K, forcing, c, t, floor)
+        return self._solve_kkt(K, forcing, c, t, floor, scales)
 
-    def _ode_function(self, alpha: float = 0.0, beta: float = 0.0):
+    def _row_scales(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
+        """Reference constraint row sizes for the integrators' floor (:func:`pfaff.kkt.row_scales`)."""
+        if not self.dense or not self.m:
+            return None
+        K = self._kkt(t, q, qd)[0]
+        try:
+            return row_scales(K[: self.n, : self.n], K[self.n :, : self.n])
+        except np.linalg.LinAlgError:  # M singular: the full augmented matrix is used anyway
+            return None
+
+    def _ode_function(
+        self, alpha: float = 0.0, beta: float = 0.0, scales: np.ndarray | None = None
+    ):
         """y' = [q̇, q̈] of y = [q, q̇] (Baumgarte-stabilized when α, β > 0), for integrators.
 
-        Small systems get a closure around the fused kernel and LAPACK gesv: a few microseconds
-        per call. A non-finite q̈ raises :class:`StateError` naming the time.
+        Small systems get a closure around the fused kernel: a few microseconds per call; its
+        attribute ``on_lists`` is the same function on lists of floats (:mod:`pfaff.fastrk`).
+        A non-finite q̈ raises :class:`StateError` naming the time. ``scales``: reference row
+        sizes for the floor of :mod:`pfaff.kkt` (None: relative to the largest row).
         """
         n = self.n
         fk = self._fused
@@ -325,19 +342,20 @@ class NumericModel:
             def fun(t: float, y: np.ndarray) -> np.ndarray:
                 out = np.empty(2 * n)
                 out[:n] = y[n:]
-                out[n:] = solve(t, y[:n], y[n:], alpha, beta, FLOOR)[0]
+                out[n:] = solve(t, y[:n], y[n:], alpha, beta, FLOOR, scales)[0]
                 if not math.isfinite(out.sum()):
                     raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
                 return out
 
             return fun
         kfn, ofn, sfn, p, gesv = fk.kfn, fk.ofn, fk.sfn, (*self._p, alpha, beta), _gesv
-        isfinite, floor = math.isfinite, FLOOR
+        isfinite = math.isfinite
+        # no reference sizes: no floor (a singular S then goes to LAPACK and least squares)
+        taus = [0.0] * self.m if scales is None else (FLOOR * np.asarray(scales)).tolist()
 
-        def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
-            yl = y.tolist()
+        def list_fun(t: float, yl: list) -> list:
             try:
-                qdd = sfn(*ofn(t, *yl, *p), floor)
+                qdd = sfn(*ofn(t, *yl, *p), *taus)
             except (ValueError, ZeroDivisionError):  # M not definite: LAPACK on the whole K
                 K, r = kfn(t, *yl, *p)
                 x, info = gesv(K, r)[2:]
@@ -346,8 +364,12 @@ class NumericModel:
                 qdd = x[:n].tolist()
             if not isfinite(sum(qdd)):
                 raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-            return np.array(yl[n:] + qdd)
+            return yl[n:] + qdd
 
+        def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
+            return np.array(list_fun(t, y.tolist()))
+
+        fused_fun.on_lists = list_fun  # type: ignore[attr-defined]
         return fused_fun
 
     def _fused_accelerations(

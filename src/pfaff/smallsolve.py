@@ -12,9 +12,9 @@ without inertia) the function raises ``ValueError`` or ``ZeroDivisionError`` and
 back to the general path.
 
 Where the constraint Jacobian loses rank (a linkage folded flat) S becomes singular. With
-``floor=True`` each pivot d of its Cholesky factorization is replaced by :func:`floored` (d, τ),
-τ = ``tau`` · max diag S: unchanged when d >= τ, a smooth floor of at least τ/2 below. Only the
-collapsing direction is affected (see :mod:`pfaff.kkt`).
+``floor=True`` the j-th pivot d of its Cholesky factorization is replaced by :func:`floored`
+(d, τ_j), with thresholds τ_j given per constraint row: unchanged when d >= τ_j, a smooth floor
+of at least τ_j/2 below. Only the collapsing direction is affected (see :mod:`pfaff.kkt`).
 """
 
 from __future__ import annotations
@@ -57,8 +57,8 @@ class _Writer:
         self.lines.append(f"    {name} = {expr}")
         return name
 
-    def cholesky(self, S: list[list[Entry]], tau: str | None = None) -> list[list[Entry]]:
-        """Cholesky factor of S; with ``tau`` (a variable name) the pivots are floored at it."""
+    def cholesky(self, S: list[list[Entry]], tau: list[str] | None = None) -> list[list[Entry]]:
+        """Cholesky factor of S; with ``tau`` (variable names) pivot j is floored at tau[j]."""
         k = len(S)
         L: list[list[Entry]] = [[None] * k for _ in range(k)]
         for j in range(k):
@@ -68,7 +68,7 @@ class _Writer:
                 diag = f"{diag} - ({acc})"
             if tau:  # the common case d >= τ costs one comparison, no call
                 d = self.let(diag)
-                diag = f"{d} if {d} >= {tau} else floored({d}, {tau})"
+                diag = f"{d} if {d} >= {tau[j]} else floored({d}, {tau[j]})"
             L[j][j] = self.let(f"sqrt({diag})")
             for i in range(j + 1, k):
                 acc = _dot([(L[i][p], L[j][p]) for p in range(j)])
@@ -113,8 +113,8 @@ def schur_solver(
 
     With ``damped=True`` the function takes one more argument ``shift`` and solves with
     S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.projection`). With
-    ``floor=True`` it takes one more argument ``tau`` and floors the pivots of S at
-    tau · max diag S (accelerations through rank loss, :mod:`pfaff.kkt`).
+    ``floor=True`` it takes m more arguments ``tau0 … tau{m-1}`` and floors the j-th pivot of S
+    at tau_j (accelerations through rank loss, :mod:`pfaff.kkt`).
 
     Parameters
     ----------
@@ -151,10 +151,7 @@ def schur_solver(
         tr = w.let(f"shift * ({' + '.join(S[i][i] or '0.0' for i in range(m))})")
         for i in range(m):
             S[i][i] = w.let(f"{S[i][i] or '0.0'} + {tr}")
-    tau = None
-    if floor and m:
-        diag = ", ".join(S[i][i] or "0.0" for i in range(m))
-        tau = w.let(f"tau * max({diag})" if m > 1 else f"tau * {diag}")
+    tau = [f"tau{i}" for i in range(m)] if floor else None
     r = []
     for i in range(m):
         acc = _dot(list(zip(A[i], y, strict=True)))
@@ -165,7 +162,7 @@ def schur_solver(
         acc = _dot([(Z[k][i], lam[k]) for k in range(m)])
         terms = [x for x in (y[i], acc) if x is not None]
         out.append(" + ".join(terms) if terms else "0.0")
-    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []) + (["tau"] if floor else []))
+    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []) + (tau or []))
     src = f"def solve({args}):\n" + "\n".join(w.lines) + f"\n    return [{', '.join(out)}]\n"
     namespace: dict = {"sqrt": math.sqrt, "floored": floored}
     exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
