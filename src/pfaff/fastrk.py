@@ -11,6 +11,7 @@ projection, restarts, dense output at ``t_eval`` — is shared with the SciPy pa
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from functools import lru_cache
 
@@ -22,32 +23,41 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # the usual step-size controlle
 _EXPONENT = -1.0 / (DOP853.error_estimator_order + 1)
 
 
-def _combo(coefs: np.ndarray, stages: list[str], i: int) -> str:
-    terms = [f"{float(c)!r}*{k}[{i}]" for c, k in zip(coefs, stages, strict=False) if c != 0.0]
+def _combo(coefs: np.ndarray, i: int) -> str:
+    terms = [f"{float(c)!r}*k{j}_{i}" for j, c in enumerate(coefs) if c != 0.0]
     return " + ".join(terms) if terms else "0.0"
 
 
 @lru_cache(maxsize=16)
 def _step_function(size: int) -> Callable:
-    """``step(fun, t, y, k0, h, rtol, atol) -> (y_new, f_new, err5², err3², stages)``."""
+    """``step(fun, t, y, k0, h, rtol, atol) -> (y_new, f_new, err5², err3², stages)``.
+
+    Every component of every stage is a local variable (``k3_1``): no list indexing in the sums.
+    """
     A, B, C, E3, E5 = DOP853.A, DOP853.B, DOP853.C, DOP853.E3, DOP853.E5
     S = DOP853.n_stages
-    ks = [f"k{s}" for s in range(S + 1)]
-    lines = ["def step(fun, t, y, k0, h, rtol, atol):"]
+
+    def unpack(name: str) -> str:
+        return f"    {', '.join(f'{name}_{i}' for i in range(size))}, = {name}"
+
+    lines = ["def step(fun, t, y, k0, h, rtol, atol):", unpack("y"), unpack("k0")]
     for s in range(1, S):
-        ys = [f"y[{i}] + h*({_combo(A[s, :s], ks, i)})" for i in range(size)]
+        ys = [f"y_{i} + h*({_combo(A[s, :s], i)})" for i in range(size)]
         lines.append(f"    k{s} = fun(t + {float(C[s])!r}*h, [{', '.join(ys)}])")
-    yn = [f"y[{i}] + h*({_combo(B, ks, i)})" for i in range(size)]
+        lines.append(unpack(f"k{s}"))
+    yn = [f"y_{i} + h*({_combo(B, i)})" for i in range(size)]
     lines.append(f"    yn = [{', '.join(yn)}]")
+    lines.append(unpack("yn"))
     lines.append(f"    k{S} = fun(t + h, yn)")
+    lines.append(unpack(f"k{S}"))
     lines.append("    e5 = e3 = 0.0")
     for i in range(size):
-        lines.append(f"    sc = atol[{i}] + max(abs(y[{i}]), abs(yn[{i}]))*rtol")
-        lines.append(f"    a = ({_combo(E5, ks, i)})/sc")
-        lines.append(f"    b = ({_combo(E3, ks, i)})/sc")
+        lines.append(f"    sc = atol[{i}] + max(abs(y_{i}), abs(yn_{i}))*rtol")
+        lines.append(f"    a = ({_combo(E5, i)})/sc")
+        lines.append(f"    b = ({_combo(E3, i)})/sc")
         lines.append("    e5 += a*a")
         lines.append("    e3 += b*b")
-    lines.append(f"    return yn, k{S}, e5, e3, [{', '.join(ks)}]")
+    lines.append(f"    return yn, k{S}, e5, e3, [{', '.join(f'k{s}' for s in range(S + 1))}]")
     namespace: dict = {}
     exec(compile("\n".join(lines) + "\n", "<pfaff.fastrk>", "exec"), namespace)  # our own code
     return namespace["step"]
@@ -93,9 +103,14 @@ class FloatDOP853:
         ref = DOP853(
             self.array_fun, t0, np.asarray(y0, dtype=float), t_bound, rtol=rtol, atol=atol, **kw
         )
-        self.t, self._y, self._f = ref.t, ref.y.tolist(), ref.f.tolist()
-        self.t_bound, self.direction = ref.t_bound, ref.direction
-        self.rtol, self.max_step, self.h_abs = float(ref.rtol), ref.max_step, ref.h_abs
+        # Python floats throughout: one NumPy scalar would turn every stage sum into NumPy calls
+        self.t, self._y, self._f = float(ref.t), ref.y.tolist(), ref.f.tolist()
+        self.t_bound, self.direction = float(ref.t_bound), float(ref.direction)
+        self.rtol, self.max_step, self.h_abs = (
+            float(ref.rtol),
+            float(ref.max_step),
+            float(ref.h_abs),
+        )
         self.atol = np.broadcast_to(ref.atol, (len(self._y),)).astype(float).tolist()
         self.nfev = ref.nfev
         self.status = "running" if self.t != t_bound else "finished"
@@ -122,7 +137,7 @@ class FloatDOP853:
     def step(self) -> str | None:
         """One accepted step (rejected attempts included); a message on failure."""
         t, y, d = self.t, self._y, self.direction
-        min_step = 10 * abs(np.nextafter(t, d * np.inf) - t)
+        min_step = 10.0 * abs(math.nextafter(t, d * math.inf) - t)
         h_abs = min(max(self.h_abs, min_step), self.max_step)
         rejected = False
         size = len(y)
@@ -140,7 +155,7 @@ class FloatDOP853:
             err = 0.0 if e5 == 0.0 and e3 == 0.0 else h_abs * e5 / (size * (e5 + 0.01 * e3)) ** 0.5
             if err < 1.0:
                 factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err**_EXPONENT)
-                self.h_abs = h_abs * (min(1.0, factor) if rejected else factor)
+                self.h_abs = float(h_abs * (min(1.0, factor) if rejected else factor))
                 break
             h_abs *= max(MIN_FACTOR, SAFETY * err**_EXPONENT)
             rejected = True

@@ -9,13 +9,15 @@ precomputed indices. The result is checked against the template kernels before i
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
 
-from .smallsolve import schur_solver
+from .smallsolve import NAMESPACE, schur_solver, schur_source
 from .symbols import accel, t
 
 if TYPE_CHECKING:
@@ -44,8 +46,12 @@ class FusedKernel:
         for LAPACK (the ODE right-hand side of small systems).
     ofn, sfn : callable
         ``ofn`` (same arguments as ``kfn``) gives the flat [M entries, A entries, Q − h, c] and
-        ``sfn(*that, floor)`` q̈ by straight-line Schur-complement code with the pivots of
+        ``sfn(*that, *taus)`` q̈ by straight-line Schur-complement code with the pivots of
         A M⁻¹Aᵀ floored (:mod:`pfaff.smallsolve`, :mod:`pfaff.kkt`).
+    rfn : callable or None
+        Both in one generated function: ``rfn(*params, alpha, beta, *taus, slow)`` returns
+        ``rhs(t, y: list) -> [q̇, q̈]`` (a list), which calls ``slow(t, y)`` where M is not
+        positive definite. None if the printer could not write the expressions.
     qfn, cfn : callable
         Small-system projection in plain Python:
         ``qfn(t, q.., qd.., *params) -> [M entries..., A entries..., f..., g...]`` and
@@ -66,6 +72,7 @@ class FusedKernel:
     kfn: Callable
     ofn: Callable
     sfn: Callable
+    rfn: Callable | None
     qfn: Callable
     cfn: Callable
     kkt_index: np.ndarray
@@ -115,7 +122,7 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
     )
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
-    kfn, ofn = _kkt_function(plain, mass, acon, n, m, args, qds)
+    kfn, ofn, rfn = _kkt_function(plain, mass, acon, n, m, args, qds)
     sfn = schur_solver(n, m, mass, acon, floor=True)
     qfn = _projection_function(plain, mass, acon, n, m, args, qds)
     cfn = schur_solver(n, m, mass, acon, damped=True)
@@ -135,6 +142,7 @@ def build_fused(eom: EquationsOfMotion) -> FusedKernel | None:
         kfn,
         ofn,
         sfn,
+        rfn,
         qfn,
         cfn,
         np.array(index, dtype=np.int64),
@@ -169,7 +177,49 @@ def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: lis
     ofn = sp.lambdify(
         [*args, alpha, beta], plain[: off + n] + c, modules="math", cse=True, docstring_limit=0
     )
-    return kfn, ofn
+    try:
+        rfn = _rhs_factory(plain[: off + n] + c, mass, acon, n, m, args, (alpha, beta))
+    except (SyntaxError, TypeError, ValueError, NameError):  # something the printer cannot write
+        rfn = None
+    return kfn, ofn, rfn
+
+
+def _rhs_factory(
+    exprs: list, mass: list, acon: list, n: int, m: int, args: list, ab: tuple
+) -> Callable:
+    """Generate ``rfn`` (see :class:`FusedKernel`): the fused kernel and the Schur solve in one."""
+    t_, qs, qds, params = args[0], args[1 : n + 1], args[n + 1 : 2 * n + 1], args[2 * n + 1 :]
+    P = [sp.Symbol(f"_p{i}") for i in range(len(params))]
+    rule = {**dict(zip(params, P, strict=True)), t_: sp.Symbol("_t")}
+    rule.update({ab[0]: sp.Symbol("_alpha"), ab[1]: sp.Symbol("_beta")})
+    rule.update({q: sp.Symbol(f"_y{i}") for i, q in enumerate([*qs, *qds])})
+    repl, red = sp.cse([sp.sympify(e).xreplace(rule) for e in exprs], sp.numbered_symbols("_x"))
+    pr = PythonCodePrinter({"standard": "python3"})
+    nM, nA = len(mass), len(acon)
+    Ms, As = [f"_m{k}" for k in range(nM)], [f"_a{k}" for k in range(nA)]
+    Fs, cs = [f"_F{i}" for i in range(n)], [f"_c{i}" for i in range(m)]
+    taus = [f"_tau{i}" for i in range(m)]
+    body = [f"{pr.doprint(x)} = {pr.doprint(e)}" for x, e in repl]
+    body += [f"{v} = {pr.doprint(e)}" for v, e in zip(Ms + As + Fs + cs, red, strict=True)]
+    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, prefix="_v")
+    body += [ln.strip() for ln in lines]
+    ys = ", ".join(f"_y{i}" for i in range(2 * n))
+    src = "\n".join(
+        [
+            f"def make({', '.join([*map(str, P), '_alpha', '_beta', *taus])}, _slow):",
+            "    def rhs(_t, _y):",
+            f"        {ys}, = _y",
+            "        try:",
+            *[f"            {ln}" for ln in body],
+            "        except (ValueError, ZeroDivisionError):",
+            "            return _slow(_t, _y)",
+            f"        return [{', '.join([f'_y{n + i}' for i in range(n)] + out)}]",
+            "    return rhs",
+        ]
+    )
+    namespace = {**NAMESPACE, "math": math}
+    exec(compile(src + "\n", "<pfaff.fused rhs>", "exec"), namespace)  # our own generated code
+    return namespace["make"]
 
 
 def _projection_function(

@@ -353,7 +353,7 @@ class NumericModel:
         # no reference sizes: no floor (a singular S then goes to LAPACK and least squares)
         taus = [0.0] * self.m if scales is None else (FLOOR * np.asarray(scales)).tolist()
 
-        def list_fun(t: float, yl: list) -> list:
+        def slow(t: float, yl: list) -> list:
             try:
                 qdd = sfn(*ofn(t, *yl, *p), *taus)
             except (ValueError, ZeroDivisionError):  # M not definite: LAPACK on the whole K
@@ -362,9 +362,15 @@ class NumericModel:
                 if info != 0:  # singular: the careful path
                     x = self._solve_full(np.array(K), np.array(r), t)[0]
                 qdd = x[:n].tolist()
-            if not isfinite(sum(qdd)):
-                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
             return yl[n:] + qdd
+
+        rhs = fk.rfn(*p, *taus, slow) if fk.rfn is not None else slow
+
+        def list_fun(t: float, yl: list) -> list:
+            out = rhs(t, yl)
+            if not isfinite(sum(out)):
+                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+            return out
 
         def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
             return np.array(list_fun(t, y.tolist()))

@@ -45,15 +45,16 @@ def _dot(pairs: list[tuple[Entry, Entry]]) -> str | None:
 
 
 class _Writer:
-    def __init__(self) -> None:
+    def __init__(self, prefix: str = "v") -> None:
         self.lines: list[str] = []
         self.count = 0
+        self.prefix = prefix
 
     def let(self, expr: str | None) -> Entry:
         if expr is None:
             return None
         self.count += 1
-        name = f"v{self.count}"
+        name = f"{self.prefix}{self.count}"
         self.lines.append(f"    {name} = {expr}")
         return name
 
@@ -130,10 +131,43 @@ def schur_solver(
     >>> [round(v, 12) for v in solve(1.0, 1.0, 0.6, -0.8, 0.0, -9.81, -1.0)]
     [-5.3088, -2.7316]
     """
-    w = _Writer()
     Ms = [f"m{s}" for s in range(len(mass))]
     As = [f"a{s}" for s in range(len(acon))]
     Fs, cs = [f"F{i}" for i in range(n)], [f"c{i}" for i in range(m)]
+    tau = [f"tau{i}" for i in range(m)] if floor else None
+    lines, out = schur_source(
+        mass, acon, Ms, As, Fs, cs, shift="shift" if damped else None, tau=tau
+    )
+    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []) + (tau or []))
+    src = f"def solve({args}):\n" + "\n".join(lines) + f"\n    return [{', '.join(out)}]\n"
+    namespace: dict = dict(NAMESPACE)
+    exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
+    return namespace["solve"]
+
+
+NAMESPACE = {"sqrt": math.sqrt, "floored": floored}  # what the generated lines call
+
+
+def schur_source(
+    mass: list[tuple[int, int]],
+    acon: list[tuple[int, int]],
+    Ms: list[str],
+    As: list[str],
+    Fs: list[str],
+    cs: list[str],
+    *,
+    shift: str | None = None,
+    tau: list[str] | None = None,
+    prefix: str = "v",
+) -> tuple[list[str], list[str]]:
+    """Lines (indented for a function body) computing q̈, and the n expressions of q̈.
+
+    The inputs are variable names: M's entries ``Ms`` (pattern ``mass``), A's ``As`` (pattern
+    ``acon``), the forcing ``Fs`` and the constraint right-hand side ``cs``; intermediate variables
+    are ``{prefix}1, {prefix}2, …``. ``shift`` and ``tau`` as in :func:`schur_solver`.
+    """
+    n, m = len(Fs), len(cs)
+    w = _Writer(prefix)
     M: list[list[Entry]] = [[None] * n for _ in range(n)]
     for name, (i, j) in zip(Ms, mass, strict=True):
         M[i][j] = M[j][i] = name
@@ -147,11 +181,10 @@ def schur_solver(
     for i in range(m):
         for j in range(i + 1):
             S[i][j] = S[j][i] = w.let(_dot(list(zip(A[i], Z[j], strict=True))))
-    if damped and m:
-        tr = w.let(f"shift * ({' + '.join(S[i][i] or '0.0' for i in range(m))})")
+    if shift and m:
+        tr = w.let(f"{shift} * ({' + '.join(S[i][i] or '0.0' for i in range(m))})")
         for i in range(m):
             S[i][i] = w.let(f"{S[i][i] or '0.0'} + {tr}")
-    tau = [f"tau{i}" for i in range(m)] if floor else None
     r = []
     for i in range(m):
         acc = _dot(list(zip(A[i], y, strict=True)))
@@ -162,8 +195,4 @@ def schur_solver(
         acc = _dot([(Z[k][i], lam[k]) for k in range(m)])
         terms = [x for x in (y[i], acc) if x is not None]
         out.append(" + ".join(terms) if terms else "0.0")
-    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []) + (tau or []))
-    src = f"def solve({args}):\n" + "\n".join(w.lines) + f"\n    return [{', '.join(out)}]\n"
-    namespace: dict = {"sqrt": math.sqrt, "floored": floored}
-    exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
-    return namespace["solve"]
+    return w.lines, out
