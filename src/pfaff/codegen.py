@@ -43,7 +43,13 @@ class Kernel:
         args = [q[c] for c in self.columns] + [qd[c] for c in self.columns]
         outs = self.fn(*args, t_, *p)
         shape = (self.n_inst,)
-        return [np.broadcast_to(np.asarray(o, dtype=float), shape) for o in outs]
+        if self.n_inst > 4096:  # constant outputs as read-only views: no memory per instance
+            return [np.broadcast_to(np.asarray(o, dtype=float), shape) for o in outs]
+        # few instances: np.full is five times cheaper than broadcast_to for a constant
+        return [
+            o if type(o) is np.ndarray and o.shape == shape else np.full(shape, o, dtype=float)
+            for o in outs
+        ]
 
 
 def make_kernel(block: Block, exprs: list[sp.Expr], params: Sequence[sp.Symbol]) -> Kernel:

@@ -40,6 +40,7 @@ SCALE_FLOOR = 1e-3  # a row's reference size is at least this fraction of the la
 STATE_FLOOR = 1e-15  # τ / max diag S for a single state
 _potrf = scipy.linalg.lapack.dpotrf
 _potrs = scipy.linalg.lapack.dpotrs
+_trtrs = scipy.linalg.lapack.dtrtrs
 
 
 def floored_array(e: np.ndarray, tau: np.ndarray | float) -> np.ndarray:
@@ -114,6 +115,8 @@ def solve_floored(
     ([0.0, 0.0], [0.0, 0.0])
     """
     m = A.shape[-2]
+    if M.ndim == 2:
+        return _solve_one(M, A, F, c, floor, scales)
     At = np.swapaxes(A, -1, -2)
     Y = np.linalg.solve(M, np.concatenate([F[..., None], At], axis=-1))
     y, Z = Y[..., 0], Y[..., 1:]
@@ -122,6 +125,27 @@ def solve_floored(
     S = A @ Z
     S = 0.5 * (S + np.swapaxes(S, -1, -2))
     r = c - np.einsum("...ij,...j->...i", A, y)
+    lam = _floored_lambda(S, r, floor, scales)
+    return y + np.einsum("...ij,...j->...i", Z, lam), lam
+
+
+def _solve_one(M, A, F, c, floor, scales) -> tuple[np.ndarray, np.ndarray]:
+    """One state with LAPACK straight: M = L Lᵀ, W = L⁻¹Aᵀ, S = WᵀW (half the work of M⁻¹Aᵀ)."""
+    L, info = _potrf(M, lower=1)
+    if info != 0:
+        raise np.linalg.LinAlgError("the mass matrix is not positive definite")
+    u = _trtrs(L, F, lower=1)[0]
+    y = _trtrs(L, u, lower=1, trans=1)[0]
+    if A.shape[0] == 0:
+        return y, np.zeros(0)
+    W = _trtrs(L, A.T, lower=1)[0]
+    S = W.T @ W
+    lam = _floored_lambda(S, c - A @ y, floor, scales)
+    return y + _trtrs(L, W @ lam, lower=1, trans=1)[0], lam
+
+
+def _floored_lambda(S: np.ndarray, r: np.ndarray, floor: float, scales) -> np.ndarray:
+    """λ = S⁻¹ r with the eigenvalues of S (row-scaled by ``scales``) floored."""
     if scales is not None:
         w = 1.0 / np.sqrt(scales)
         S = S * w[:, None] * w[None, :]
@@ -130,7 +154,7 @@ def solve_floored(
     else:
         w = None
         tau = floor * np.max(np.diagonal(S, axis1=-2, axis2=-1), axis=-1)
-    lam = None
+    lam: np.ndarray | None = None
     if S.ndim == 2:
         chol, info = _potrf(S, lower=1)
         # all pivots well above τ: S is far from singular and is solved exactly
@@ -141,6 +165,4 @@ def solve_floored(
         with np.errstate(divide="ignore", invalid="ignore"):  # S = 0: no constraint acts
             u = np.einsum("...ji,...j->...i", V, r) / floored_array(e, tau[..., None])
         lam = np.einsum("...ij,...j->...i", V, u)
-    if w is not None:
-        lam = lam * w
-    return y + np.einsum("...ij,...j->...i", Z, lam), lam
+    return lam * w if w is not None else lam

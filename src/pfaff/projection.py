@@ -58,8 +58,13 @@ def _correction(A: np.ndarray | sps.spmatrix, W: Any, r: np.ndarray) -> np.ndarr
     return Z @ _damped_solve(A @ Z, r)
 
 
-def _metric(M: np.ndarray, A: np.ndarray) -> tuple:
-    """Cholesky factor of the projection metric: M, or M + κAᵀA if M is singular, or diag."""
+def _metric(M: Any, A: np.ndarray | sps.spmatrix) -> Any:
+    """Cholesky factor of the projection metric: M, or M + κAᵀA if M is singular, or diag.
+
+    A sparse model's diagonal (1-D ``M``) is its own metric.
+    """
+    if np.ndim(M) == 1:
+        return M
     try:
         return scipy.linalg.cho_factor(M)
     except np.linalg.LinAlgError:
@@ -107,18 +112,17 @@ class Projector:
         self.stats = {"projections": 0, "projection_iterations": 0}
 
     def _matrices(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
-        """A, the metric (see :func:`_correction`), f (holonomic rows) and g at a state."""
+        """A, M (dense) or diag M (sparse), f (holonomic rows) and g at a state."""
         K, _, _, _, f, g = self.model._kkt(t, q, qd)
         n = self.model.n
         if sps.issparse(K):
             K = sps.csr_matrix(K)
             d, A = K[:n, :n].diagonal(), K[n:, :n]
             d[~(d > 0)] = 1.0  # a coordinate without inertia of its own: unit weight
-            W: Any = d
+            M: Any = d
         else:
-            A = K[n:, :n]
-            W = _metric(K[:n, :n], A)
-        return A, W, np.where(self.holonomic, f, 0.0), g
+            A, M = K[n:, :n], K[:n, :n]
+        return A, M, np.where(self.holonomic, f, 0.0), g
 
     def __call__(
         self, t: float, q: np.ndarray, qd: np.ndarray
@@ -140,18 +144,18 @@ class Projector:
             out = self._small(fk, t, q.tolist(), qd.tolist())
             if out is not None:
                 return out
-        A, W, f, g = self._matrices(t, q, qd)
+        A, M, f, g = self._matrices(t, q, qd)
         thr = self._thresholds(A)
         if max(np.max(np.abs(f) / thr), np.max(np.abs(g) / thr)) <= 1.0:
             return q, qd, False
         q, qd = q.copy(), qd.copy()
         it, last = 0, np.inf
         while (err := np.max(np.abs(f) / thr)) > 1.0 and it < self.max_iter and err < last:
-            q -= _correction(A, W, f)  # Newton, with the Jacobian at the current q
+            q -= _correction(A, _metric(M, A), f)  # Newton, with the Jacobian at the current q
             it, last = it + 1, err
-            A, W, f, g = self._matrices(t, q, qd)
+            A, M, f, g = self._matrices(t, q, qd)
         if np.max(np.abs(g) / thr) > 1.0:
-            qd -= _correction(A, W, g)  # exact up to the damping: g is linear in q̇
+            qd -= _correction(A, _metric(M, A), g)  # exact up to the damping: g is linear in q̇
         self._count(max(it, 1))
         return q, qd, True
 
