@@ -128,9 +128,11 @@ def simulate(
         Start and end time, end > start.
     method : {"projection", "baumgarte", "ida"}
         "projection" (default): adaptive Runge–Kutta on the acceleration-level equations, the state
-        projected onto f = 0 and A q̇ + b = 0 after every step. "baumgarte": the stabilized field
-        A q̈ + Ȧq̇ + ḃ = −2α(A q̇ + b) − β² f, no projection. "ida": SUNDIALS IDA on the
-        index-2 GGL formulation.
+        projected mass-orthogonally onto f = 0 and A q̇ + b = 0 after every step; passes
+        configurations where A loses rank (see :mod:`pfaff.kkt`). "baumgarte": the stabilized
+        field A q̈ + Ȧq̇ + ḃ = −2α(A q̇ + b) − β² f, no projection (through such configurations
+        only with α, β fast against the motion). "ida": SUNDIALS IDA on the index-2 GGL
+        formulation.
     rtol, atol : float
         Integrator tolerances.
     t_eval : array_like, shape (k,), optional
@@ -139,7 +141,8 @@ def simulate(
         Runge–Kutta method of "projection" and "baumgarte".
     max_step, first_step : float, optional
     alpha, beta : float
-        Baumgarte gains (1/time); α = β damps the drift critically.
+        Baumgarte gains (1/time); α = β damps the drift critically. Choose them a few times faster
+        than the motion's own rates.
     constraint_tol : float
         Target max |f| and max |A q̇ + b| of projected states.
     initial_tol : float
