@@ -35,9 +35,11 @@ def acceleration_field(
     ``start`` = (t0, q0, q̇0) sets the reference constraint row sizes of the floor that carries
     the solve through rank loss (:mod:`pfaff.kkt`).
     """
-    if hasattr(model, "_ode_function"):
+    if hasattr(model, "_row_scales"):  # NumericModel
         scales = model._row_scales(*start) if start is not None else None
         return model._ode_function(alpha, beta, scales)
+    if hasattr(model, "_ode_function"):  # a model with its own (e.g. structured O(N)) field
+        return model._ode_function(alpha, beta)
     n, solve = model.n, model._solve_accelerations
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
