@@ -179,7 +179,7 @@ def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: lis
     )
     try:
         rfn = _rhs_factory(plain[: off + n] + c, mass, acon, n, m, args, (alpha, beta))
-    except (SyntaxError, TypeError, ValueError, NameError):  # something the printer cannot write
+    except Exception:  # something the printer cannot write: the two-call path
         rfn = None
     return kfn, ofn, rfn
 
