@@ -158,8 +158,9 @@ class IDAStepper:
         if self._tiny_count >= STALL_STEPS:
             raise PfaffError(
                 f"IDA stalled at t = {self.t:.17g}: {STALL_STEPS} steps in a row shorter than "
-                f"{self._tiny_step:.3g}. This happens where the constraint Jacobian loses rank (a "
-                "linkage folding flat); method='projection' passes such configurations"
+                f"{self._tiny_step:.3g}. Its corrector cannot meet the tolerances here: they may "
+                "be too tight for IDA (rtol below about 1e-10), or the constraint Jacobian loses "
+                "rank (a linkage folding flat, which method='projection' passes)"
             )
         self.stats["steps"] += 1
         self.stats["nfev"] = int(res.nfev)
