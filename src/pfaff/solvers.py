@@ -14,13 +14,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg.blas as blas
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from .banded import LowerBand
 from .errors import ConstraintError
-from .streams import Index, indices, scatter_add
+from .streams import Index, axpy, dot, indices, scatter_add
 
 P_MAX = 32  # ordinary coordinates for the dense projected system
 W_MAX = 8  # bandwidth of the triangular constraint structure
@@ -145,8 +144,8 @@ class TriangularSolver:
             v[g] = 1.0
             np.negative(Z[g], out=v[p:])
             model.matvec(mvals, v, out=MT[g])
-        Mr = np.array([[MT[g][h] - Z[h] @ MT[g][p:] for g in range(p)] for h in range(p)])
-        rr = np.array([r0[h] - (0.0 if fl is None else Z[h] @ fl) for h in range(p)])
+        Mr = np.array([[MT[g][h] - dot(Z[h], MT[g][p:]) for g in range(p)] for h in range(p)])
+        rr = np.array([r0[h] - (0.0 if fl is None else dot(Z[h], fl)) for h in range(p)])
         try:
             qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
         except np.linalg.LinAlgError as e:
@@ -173,7 +172,7 @@ def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
     else:
         out.fill(0.0)
     for g in range(start, len(coef)):
-        blas.daxpy(vecs[g], out, a=float(coef[g]))
+        axpy(float(coef[g]), vecs[g], out)
 
 
 class SparseSolver:

@@ -9,7 +9,9 @@ stay in cache.
 
 from __future__ import annotations
 
+import math
 import os
+import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -20,11 +22,17 @@ import scipy.linalg.blas as blas
 import sympy as sp
 
 from .symbols import local_q, local_qd, t
+from .trig import sincos, workspace
 
 CHUNK = 1 << 15  # instances per kernel call
 # NumPy releases the GIL inside ufunc loops: large kernels run their chunks on THREADS threads.
 THREADS = min(2, os.cpu_count() or 1)
 PARALLEL_FROM = 1 << 20
+# OpenBLAS runs level-1 calls (daxpy, ddot) below 10,000 elements on the calling thread; on longer
+# vectors it wakes its own threads, whose wake-up and spin-wait cost more than the call at 2^16
+# elements (a solve at N = 65536 took 16 ms instead of 2.7 ms) and compete with the kernel threads.
+BLAS_BLOCK = 8192
+SINCOS_FROM = 1 << 12  # kernels over this many instances take sin and cos from trig.sincos
 _POOL: ThreadPoolExecutor | None = None
 
 
@@ -129,7 +137,7 @@ def add_product(
         elif np.ndim(val) or np.ndim(xv):
             arr, s = (val, xv) if np.ndim(val) else (xv, val)
             if target.flags.c_contiguous and arr.flags.c_contiguous and row.count > 1:
-                blas.daxpy(arr, target, a=float(s))  # in place, one pass
+                axpy(float(s), arr, target)  # in place, one pass
             else:
                 target += np.multiply(arr, s)
         else:
@@ -139,8 +147,21 @@ def add_product(
 def dot(vals: np.ndarray | float, x: np.ndarray | float) -> float:
     """Σ_i vals_i x_i, with scalars standing for constant arrays."""
     if np.ndim(vals) and np.ndim(x):
-        return float(np.dot(vals, x))
-    return float(np.sum(np.multiply(vals, x)))
+        n = np.shape(vals)[0]
+        return math.fsum(  # type: ignore[index]
+            float(np.dot(vals[lo : lo + BLAS_BLOCK], x[lo : lo + BLAS_BLOCK]))
+            for lo in range(0, n, BLAS_BLOCK)
+        )
+    if np.ndim(vals) or np.ndim(x):
+        arr, s = (vals, x) if np.ndim(vals) else (x, vals)
+        return float(np.sum(arr)) * float(s)  # type: ignore[arg-type]
+    return float(vals) * float(x)  # type: ignore[arg-type]
+
+
+def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
+    """y += a x in place (1-D, contiguous), one pass, in blocks (see :data:`BLAS_BLOCK`)."""
+    for lo in range(0, y.shape[0], BLAS_BLOCK):
+        blas.daxpy(x[lo : lo + BLAS_BLOCK], y[lo : lo + BLAS_BLOCK], a=a)
 
 
 class StreamKernel:
@@ -185,12 +206,26 @@ class StreamKernel:
                 self.const.append(float(e.xreplace(subs)))
         args = [local_q(a) for a in range(k)] + [local_qd(a) for a in range(k)] + [t]
         self.varying = [i for i, c in enumerate(self.const) if c is None]
+        self.angles: list[sp.Expr] = []  # arguments of sin and cos, each reduced once (trig.py)
+        if count >= SINCOS_FROM:
+            self.angles = sorted(
+                {f.args[0] for e in varying for f in e.atoms(sp.sin, sp.cos)},
+                key=sp.default_sort_key,
+            )
+        if self.angles:
+            sc = [(sp.Dummy(f"s{i}"), sp.Dummy(f"c{i}")) for i in range(len(self.angles))]
+            rep = {sp.sin(a): s_ for a, (s_, _) in zip(self.angles, sc, strict=True)}
+            rep |= {sp.cos(a): c_ for a, (_, c_) in zip(self.angles, sc, strict=True)}
+            varying = [e.xreplace(rep) for e in varying]
+            self._angle_fn = sp.lambdify(args, self.angles, modules="numpy", docstring_limit=0)
+            args = args + [x for pair in sc for x in pair]
         self._fn = (
             sp.lambdify(args, varying, modules="numpy", cse=True, docstring_limit=0)
             if varying
             else None
         )
         self._out: np.ndarray | None = None
+        self._local = threading.local()
 
     def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
         out = self._out
@@ -198,8 +233,22 @@ class StreamKernel:
             hi = min(lo + CHUNK, stop)
             args = [take(c, q, lo, hi) for c in self.columns]
             args += [take(c, qd, lo, hi) for c in self.columns]
-            for j, r in enumerate(self._fn(*args, t_)):
+            trig = self._trig(args, t_, hi - lo) if self.angles else []
+            for j, r in enumerate(self._fn(*args, t_, *trig)):
                 out[j, lo:hi] = r
+
+    def _trig(self, args: list, t_: float, size: int) -> list:
+        """sin and cos of every angle over one chunk, sharing the argument reduction."""
+        buf = getattr(self._local, "buf", None)
+        if buf is None:
+            buf = self._local.buf = (np.empty((2 * len(self.angles), CHUNK)), workspace())
+        res = []
+        for i, a in enumerate(self._angle_fn(*args, t_)):
+            if np.ndim(a) == 0:
+                res += [math.sin(a), math.cos(a)]
+            else:
+                res += sincos(a, buf[0][2 * i, :size], buf[0][2 * i + 1, :size], buf[1])
+        return res
 
     def warm(self) -> None:
         """Allocate and touch the output buffers now (page faults at build time, not in a solve)."""
