@@ -125,8 +125,19 @@ class TriangularSolver:
             Z = self._z(band, G)
         return band, Z
 
-    def solve(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> tuple:
-        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
+    def solve(
+        self,
+        mvals: list,
+        f: np.ndarray,
+        avals: list,
+        c: np.ndarray | None,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero).
+
+        q̈ is written to ``out`` when given; λ is None unless ``multipliers``.
+        """
         model, p = self.model, self.plan.p
         band, Z = self._current(avals)
         n = model.n
@@ -153,9 +164,11 @@ class TriangularSolver:
                 "the projected mass matrix TᵀMT is singular: a coordinate without inertia on "
                 "the admissible motions"
             ) from e
-        qdd = np.empty(n)
+        qdd = np.empty(n) if out is None else out
         qdd[:p] = qG
         _combine(qdd[p:], None if c is None else w, Z, -qG)  # q̈_L = w - Z q̈_G
+        if not multipliers:
+            return qdd, None
         res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
         _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
         return qdd, band.solve_t(res)
@@ -216,8 +229,16 @@ class SparseSolver:
         self.indices = row[order]
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(col, minlength=N))])
 
-    def solve(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> tuple:
-        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
+    def solve(
+        self,
+        mvals: list,
+        f: np.ndarray,
+        avals: list,
+        c: np.ndarray | None,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero); see TriangularSolver."""
         model = self.model
         data = []
         for part, vals in zip(model._dyn, mvals, strict=True):
@@ -249,7 +270,11 @@ class SparseSolver:
             ) from e
         if not np.all(np.isfinite(sol)):
             raise ConstraintError("the augmented matrix [[M, Aᵀ], [A, 0]] is singular")
-        return sol[: model.n], -sol[model.n :]
+        qdd = sol[: model.n]
+        if out is not None:
+            out[:] = qdd
+            qdd = out
+        return qdd, -sol[model.n :] if multipliers else None
 
 
 def _count(a, b) -> int:

@@ -9,13 +9,13 @@ stay in cache.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from itertools import pairwise
 
 import numpy as np
 import scipy.linalg.blas as blas
@@ -39,7 +39,7 @@ _POOL: ThreadPoolExecutor | None = None
 def _pool() -> ThreadPoolExecutor:
     global _POOL
     if _POOL is None:
-        _POOL = ThreadPoolExecutor(THREADS, thread_name_prefix="pfaff-kernel")
+        _POOL = ThreadPoolExecutor(THREADS - 1, thread_name_prefix="pfaff-kernel")
     return _POOL
 
 
@@ -176,11 +176,18 @@ class StreamKernel:
     params : sequence of Symbol
     values : sequence of float
         Parameter values.
+    count : int
+        Number of instances.
+    summed : sequence of bool, optional
+        Per output: return its total over the instances (a float) instead of an array. A summed
+        output is reduced chunk by chunk while in cache and never stored: a force on an ordinary
+        coordinate, an energy.
 
     Attributes
     ----------
     const : list of float or None
-        Per output: its value when it does not depend on the state, else None.
+        Per output: its value when it does not depend on the state, else None (summed outputs:
+        the constant times ``count``).
     """
 
     def __init__(
@@ -190,6 +197,7 @@ class StreamKernel:
         params: Sequence[sp.Symbol],
         values: Sequence[float],
         count: int,
+        summed: Sequence[bool] | None = None,
     ) -> None:
         self.columns, self.count = columns, count
         k = len(columns)
@@ -206,6 +214,16 @@ class StreamKernel:
                 self.const.append(float(e.xreplace(subs)))
         args = [local_q(a) for a in range(k)] + [local_qd(a) for a in range(k)] + [t]
         self.varying = [i for i, c in enumerate(self.const) if c is None]
+        flags = [False] * len(exprs) if summed is None else list(summed)
+        self.const = [
+            c * count if c is not None and f else c for c, f in zip(self.const, flags, strict=True)
+        ]
+        # per varying output: its row in the stored outputs, or -1 - its row in the partial sums
+        self._slot, ns, nv = [], 0, 0
+        for i in self.varying:
+            self._slot.append(-1 - ns if flags[i] else nv)
+            ns, nv = ns + flags[i], nv + (not flags[i])
+        self._n_stored, self._n_summed = nv, ns
         self.angles: list[sp.Expr] = []  # arguments of sin and cos, each reduced once (trig.py)
         if count >= SINCOS_FROM:
             self.angles = sorted(
@@ -225,17 +243,21 @@ class StreamKernel:
             else None
         )
         self._out: np.ndarray | None = None
+        self._partial = np.zeros((ns, -(-count // CHUNK)))
         self._local = threading.local()
 
     def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
-        out = self._out
+        out, partial = self._out, self._partial
         for lo in range(start, stop, CHUNK):
             hi = min(lo + CHUNK, stop)
             args = [take(c, q, lo, hi) for c in self.columns]
             args += [take(c, qd, lo, hi) for c in self.columns]
             trig = self._trig(args, t_, hi - lo) if self.angles else []
-            for j, r in enumerate(self._fn(*args, t_, *trig)):
-                out[j, lo:hi] = r
+            for j, r in zip(self._slot, self._fn(*args, t_, *trig), strict=True):
+                if j >= 0:
+                    out[j, lo:hi] = r  # type: ignore[index]
+                else:
+                    partial[-1 - j, lo // CHUNK] = np.sum(r) if np.ndim(r) else r * (hi - lo)
 
     def _trig(self, args: list, t_: float, size: int) -> list:
         """sin and cos of every angle over one chunk, sharing the argument reduction."""
@@ -253,27 +275,36 @@ class StreamKernel:
     def warm(self) -> None:
         """Allocate and touch the output buffers now (page faults at build time, not in a solve)."""
         if self._fn is not None and self._out is None:
-            self._out = np.zeros((len(self.varying), self.count))
+            self._out = np.zeros((self._n_stored, self.count))
             self._out.fill(0.0)
 
     def __call__(self, t_: float, q: np.ndarray, qd: np.ndarray) -> list:
-        """Every output over the instances: a float (constant) or an array, shape (count,).
+        """Every output over the instances: a float (a constant per instance, or the total of a
+        summed output) or an array, shape (count,).
 
         The arrays are buffers owned by the kernel, overwritten by the next call.
         """
         if self._fn is None:
             return list(self.const)
         if self._out is None:
-            self._out = np.empty((len(self.varying), self.count))
+            self._out = np.empty((self._n_stored, self.count))
         out = self._out
         if self.count >= PARALLEL_FROM and THREADS > 1:
-            bounds = np.linspace(0, self.count, THREADS + 1).astype(int) // CHUNK * CHUNK
-            bounds[-1] = self.count
-            spans = list(pairwise(int(b) for b in bounds))
-            list(_pool().map(lambda s: self._run(t_, q, qd, *s), spans))
+            # chunks handed out one at a time: a thread slowed down (a busy core) takes fewer
+            chunks = itertools.count()
+            last = (self.count - 1) // CHUNK
+
+            def work() -> None:
+                while (i := next(chunks)) <= last:  # next() on a count is atomic under the GIL
+                    self._run(t_, q, qd, i * CHUNK, min((i + 1) * CHUNK, self.count))
+
+            helpers = [_pool().submit(work) for _ in range(THREADS - 1)]
+            work()
+            for h in helpers:
+                h.result()
         else:
             self._run(t_, q, qd, 0, self.count)
-        res = list(self.const)
-        for j, i in enumerate(self.varying):
-            res[i] = out[j]
+        res: list = list(self.const)
+        for j, i in zip(self._slot, self.varying, strict=True):
+            res[i] = out[j] if j >= 0 else math.fsum(self._partial[-1 - j])
         return res
