@@ -243,13 +243,15 @@ class StreamKernel:
             else None
         )
         self._out: np.ndarray | None = None
+        self.chunk = CHUNK  # instances per call of the generated function
         self._partial = np.zeros((ns, -(-count // CHUNK)))
         self._local = threading.local()
 
     def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
         out, partial = self._out, self._partial
-        for lo in range(start, stop, CHUNK):
-            hi = min(lo + CHUNK, stop)
+        step = self.chunk
+        for lo in range(start, stop, step):
+            hi = min(lo + step, stop)
             args = [take(c, q, lo, hi) for c in self.columns]
             args += [take(c, qd, lo, hi) for c in self.columns]
             trig = self._trig(args, t_, hi - lo) if self.angles else []
@@ -257,13 +259,13 @@ class StreamKernel:
                 if j >= 0:
                     out[j, lo:hi] = r  # type: ignore[index]
                 else:
-                    partial[-1 - j, lo // CHUNK] = np.sum(r) if np.ndim(r) else r * (hi - lo)
+                    partial[-1 - j, lo // step] = np.sum(r) if np.ndim(r) else r * (hi - lo)
 
     def _trig(self, args: list, t_: float, size: int) -> list:
         """sin and cos of every angle over one chunk, sharing the argument reduction."""
         buf = getattr(self._local, "buf", None)
         if buf is None:
-            buf = self._local.buf = (np.empty((2 * len(self.angles), CHUNK)), workspace())
+            buf = self._local.buf = (np.empty((2 * len(self.angles), self.chunk)), workspace())
         res = []
         for i, a in enumerate(self._angle_fn(*args, t_)):
             if np.ndim(a) == 0:
@@ -292,11 +294,11 @@ class StreamKernel:
         if self.count >= PARALLEL_FROM and THREADS > 1:
             # chunks handed out one at a time: a thread slowed down (a busy core) takes fewer
             chunks = itertools.count()
-            last = (self.count - 1) // CHUNK
+            step, last = self.chunk, (self.count - 1) // self.chunk
 
             def work() -> None:
                 while (i := next(chunks)) <= last:  # next() on a count is atomic under the GIL
-                    self._run(t_, q, qd, i * CHUNK, min((i + 1) * CHUNK, self.count))
+                    self._run(t_, q, qd, i * step, min((i + 1) * step, self.count))
 
             helpers = [_pool().submit(work) for _ in range(THREADS - 1)]
             work()

@@ -1,0 +1,105 @@
+"""The O(N) numerics under the family model: shared sin/cos, blocked BLAS, threaded kernels, bands."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pfaff
+import pfaff.streams as streams
+from pfaff.banded import LowerBand
+from pfaff.trig import LIMIT, sincos
+
+VALS = {"M": 2.0, "r": 0.5, "F": 3.0}
+
+
+def test_sincos_matches_libm() -> None:
+    rng = np.random.default_rng(0)
+    for scale in (1e-6, 1.0, 30.0, 1e4, LIMIT):
+        x = rng.uniform(-scale, scale, 50_000)
+        s, c = sincos(x)
+        assert np.abs(s - np.sin(x)).max() <= 2.3e-16
+        assert np.abs(c - np.cos(x)).max() <= 2.3e-16
+    x = np.array([0.0, -0.0, np.pi / 2, np.pi, -np.pi, 2 * np.pi, 1e-300, 5e-324])
+    s, c = sincos(x)
+    np.testing.assert_allclose(s, np.sin(x), rtol=1e-15, atol=2.3e-16)
+    np.testing.assert_allclose(c, np.cos(x), rtol=1e-15, atol=2.3e-16)
+    assert s[0] == 0.0 and c[0] == 1.0
+
+
+def test_sincos_strided_out_and_fallback() -> None:
+    x = np.linspace(-50, 50, 20_001)
+    s, c = np.empty(10_001), np.empty(10_001)
+    sincos(x[::2], s, c)  # a strided view, caller's buffers
+    np.testing.assert_allclose(s, np.sin(x[::2]), atol=2.3e-16)
+    big = np.array([1.0, 3e7, 1e300, -2.5])  # beyond LIMIT: this block goes to the C library
+    np.testing.assert_array_equal(sincos(big)[0], np.sin(big))
+    with np.errstate(invalid="ignore"):
+        bad = sincos(np.array([0.5, np.nan, np.inf]))
+    assert np.isnan(bad[0][1:]).all() and bad[1][0] == np.cos(0.5)
+
+
+@pytest.mark.parametrize("n", [1, 8191, 8192, 20_000])
+def test_blocked_blas_helpers(n: int) -> None:
+    rng = np.random.default_rng(n)
+    x, y = rng.normal(size=n), rng.normal(size=n)
+    assert streams.dot(x, y) == pytest.approx(float(x @ y), rel=1e-12, abs=1e-12)
+    assert streams.dot(x, 2.0) == pytest.approx(2 * x.sum(), rel=1e-12, abs=1e-12)
+    expect = y + 0.5 * x
+    streams.axpy(0.5, x, y)
+    np.testing.assert_allclose(y, expect, rtol=1e-15)
+
+
+def test_cumsum_band_with_scaled_diagonal() -> None:
+    """The running-sum solves with a unit diagonal (no scaling pass) and with a scaled one."""
+    m = 300
+    for a0 in (1.0, 2.5):
+        R = np.vstack([np.full(m, a0), np.full(m, -a0)])
+        R[0, 0] = -3.0
+        L = np.diag(R[0]) + np.diag(R[1, 1:], -1)
+        band = LowerBand(R, constant=True)
+        assert band.method == "cumsum"
+        c = np.random.default_rng(1).normal(size=m)
+        np.testing.assert_allclose(L @ band.solve(c), c, atol=1e-12)
+        np.testing.assert_allclose(L.T @ band.solve_t(c), c, atol=1e-12)
+
+
+def _ring(n: int):
+    return pfaff.models.rolling_ring(n, force=True, family=True).equations().compile(VALS)
+
+
+def test_shared_trig_and_threaded_kernels_agree(monkeypatch: pytest.MonkeyPatch) -> None:
+    """sincos path, threads over small chunks, plain NumPy path: the same numbers."""
+    n = 5000
+    q, qd = pfaff.models.ring_state(n, 0.5, theta=2.0, theta_dot=-4.0)
+    q = q + np.random.default_rng(5).normal(0, 0.01, q.shape)  # off the manifold: a real test
+    fast = _ring(n)
+    assert fast._dyn[0].kernel.angles  # n >= SINCOS_FROM: sin and cos share one reduction
+    monkeypatch.setattr(streams, "CHUNK", 512)
+    monkeypatch.setattr(streams, "PARALLEL_FROM", 1000)
+    threaded = _ring(n)
+    monkeypatch.setattr(streams, "SINCOS_FROM", 10**9)
+    monkeypatch.setattr(streams, "PARALLEL_FROM", 10**9)
+    plain = _ring(n)
+    assert not plain._dyn[0].kernel.angles
+    ref = plain.accelerations(0.0, q, qd)
+    for model in (fast, threaded):
+        for _ in range(2):  # buffers and partial sums are reused
+            qdd, lam = model.accelerations(0.0, q, qd)
+            np.testing.assert_allclose(qdd, ref[0], rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(lam, ref[1], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(model.energy(0, q, qd), plain.energy(0, q, qd), rtol=1e-12)
+        np.testing.assert_allclose(model.forcing(0, q, qd), plain.forcing(0, q, qd), rtol=1e-12)
+
+
+def test_large_ring_closed_form_with_fast_kernels() -> None:
+    n = 2**14
+    model = _ring(n)
+    q, qd = pfaff.models.ring_state(n, 0.5, theta=np.pi, theta_dot=0.7)
+    qdd, lam = model.accelerations(0.0, q, qd)
+    np.testing.assert_allclose(qdd[1:], 3.0 / (2 * 2.0 * 0.5), rtol=1e-9)
+    assert lam[0] == pytest.approx(-1.5, rel=1e-9)
+    assert np.abs(model.acceleration_residual(0.0, q, qd, qdd)).max() <= 1e-9
+    # T = ½ M ẋ² + ½ M r² θ̇² for the rolling ring at x = r θ (I = M r², centre speed r θ̇)
+    T, V = model.energy(0.0, q, qd)
+    assert T == pytest.approx(0.5 * 2.0 * (0.5 * 0.7) ** 2 * 2, rel=1e-12) and V == 0.0
