@@ -138,8 +138,12 @@ class StructuredModel:
         params = tuple(eom.parameters)
         self.n, self.m = eom.n, eom.m
         coords = eom.coordinates
-        self.coordinate_names = LazySeq(self.n, _namer(eom, coords))
-        self.multiplier_names = LazySeq(self.m, lambda i: f"lambda{i + 1}")
+        self.coordinate_names = LazySeq(self.n, *_namer(eom, coords))
+        self.multiplier_names = LazySeq(
+            self.m,
+            lambda i: f"lambda{i + 1}",
+            lambda lo, hi: [f"lambda{i}" for i in range(lo + 1, hi + 1)],
+        )
         self.constraint_names = eom.constraint_names
         self.holonomic = np.asarray(eom.holonomic, dtype=bool).reshape(self.m)
         self.parameters = {p.name: v for p, v in zip(params, values, strict=True)}
@@ -250,13 +254,15 @@ class StructuredModel:
 
     def _residuals(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         f, g = np.zeros(self.m), np.zeros(self.m)
+        tmp = self._scratch()
         for part in self._con:
             outs = part.res(t, q, qd)
             na = len(part.cols)
             for c, val in zip(part.cols, outs[:na], strict=True):
-                scatter_add(g, part.rows, np.multiply(val, take(c, qd)))
-            scatter_add(g, part.rows, outs[na])
-            scatter_add(f, part.rows, outs[na + 2])
+                add_product(g, part.rows, val, take(c, qd), tmp)
+            for out, val in ((g, outs[na]), (f, outs[na + 2])):
+                if np.ndim(val) or val != 0.0:
+                    scatter_add(out, part.rows, val)
         return f, g
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
@@ -416,7 +422,8 @@ class StructuredModel:
 
 
 def _namer(eom, coords):
-    """Coordinate name by index, as plain strings (no SymPy object per family member)."""
+    """Coordinate name by index and names lo … hi-1 at once, as plain strings (no SymPy object
+    per family member)."""
     fams = list(getattr(eom.system, "families", []))
     p = eom.n - sum(f.n for f in fams)
 
@@ -428,7 +435,16 @@ def _namer(eom, coords):
                 return f"{f.name}{f.first + i - f.offset}"
         return str(coords[i].func)
 
-    return name
+    def bulk(lo: int, hi: int) -> list[str]:
+        out = [name(i) for i in range(lo, min(hi, p))]
+        for f in fams:
+            a, b = max(lo, f.offset), min(hi, f.offset + f.n)
+            if a < b:
+                d = f.first - f.offset
+                out += [f"{f.name}{j}" for j in range(a + d, b + d)]
+        return out
+
+    return name, bulk
 
 
 def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:
