@@ -100,30 +100,47 @@ class TriangularSolver:
         for x in [self._v, *self._MT]:
             x.fill(0.0)
         self.band = None if self.var_band else LowerBand(self.R0, constant=True)
-        self.Z = None
+        self.T: np.ndarray | None = None  # T = [I; -Z], rows (p, n), when constant
+        self.C: np.ndarray | None = None  # M_const T, rows (p, n), when T is constant
         if self.band is not None:
             self.band.check()
             if not self.var_border:
-                self.Z = self._z(self.band, self.G0)
+                self.T = self._t(self.band, self.G0)
+                self.C = self._const_mt(self.T)
 
-    def _z(self, band: LowerBand, G: np.ndarray) -> np.ndarray:
-        """Z = A_L⁻¹ A_G, stored as rows (p, m)."""
-        return np.ascontiguousarray(band.solve(G.T).T) if G.size else G
+    def _const_mt(self, T: np.ndarray) -> np.ndarray:
+        """M_const T: the state-independent mass entries times T, rows (p, n)."""
+        model = self.model
+        const = [
+            [0.0 if c is None else c for c in part.kernel.const[: len(part.upper)]]
+            for part in model._dyn
+        ]
+        return np.array([model.matvec(const, T[g]) for g in range(len(T))]).reshape(T.shape)
+
+    def _t(self, band: LowerBand, G: np.ndarray) -> np.ndarray:
+        """T = [I; -A_L⁻¹ A_G] as rows (p, n): a basis of the null space of A."""
+        p, m = G.shape
+        T = np.zeros((p, p + m))
+        T[:, :p] = np.eye(p)
+        if p:
+            T[:, p:] = band.solve(G.T).T
+            np.negative(T[:, p:], out=T[:, p:])
+        return T
 
     def _current(self, avals: list) -> tuple[LowerBand, np.ndarray]:
-        band, Z = self.band, self.Z
+        band, T = self.band, self.T
         if band is None:
             R = self.R0.copy()
             for bi, ei, off, rows in self.var_band:
                 scatter_add(R[off], rows, avals[bi][ei])
             band = LowerBand(R, constant=False)
             band.check()
-        if Z is None:
+        if T is None:
             G = self.G0.copy()
             for bi, ei, g, rows in self.var_border:
                 scatter_add(G[g], rows, avals[bi][ei])
-            Z = self._z(band, G)
-        return band, Z
+            T = self._t(band, G)
+        return band, T
 
     def solve(
         self,
@@ -139,7 +156,8 @@ class TriangularSolver:
         q̈ is written to ``out`` when given; λ is None unless ``multipliers``.
         """
         model, p = self.model, self.plan.p
-        band, Z = self._current(avals)
+        band, T = self._current(avals)
+        TL = T[:, p:]  # -Z
         n = model.n
         r0 = f
         if c is not None:  # w = A_L⁻¹ c; f - M[0; w]
@@ -148,15 +166,9 @@ class TriangularSolver:
             self._v[p:] = w
             r0 = f - model.matvec(mvals, self._v)
         fl = None if c is None and self.f_local_zero else r0[p:]
-        MT = self._MT
-        for g in range(p):  # M T, T = [I; -Z]
-            v = self._v
-            v[:p] = 0.0
-            v[g] = 1.0
-            np.negative(Z[g], out=v[p:])
-            model.matvec(mvals, v, out=MT[g])
-        Mr = np.array([[MT[g][h] - dot(Z[h], MT[g][p:]) for g in range(p)] for h in range(p)])
-        rr = np.array([r0[h] - (0.0 if fl is None else dot(Z[h], fl)) for h in range(p)])
+        MT = self._mt(mvals, T)
+        Mr = np.array([[MT[g][h] + dot(TL[h], MT[g][p:]) for g in range(p)] for h in range(p)])
+        rr = np.array([r0[h] + (0.0 if fl is None else dot(TL[h], fl)) for h in range(p)])
         try:
             qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
         except np.linalg.LinAlgError as e:
@@ -166,12 +178,28 @@ class TriangularSolver:
             ) from e
         qdd = np.empty(n) if out is None else out
         qdd[:p] = qG
-        _combine(qdd[p:], None if c is None else w, Z, -qG)  # q̈_L = w - Z q̈_G
+        _combine(qdd[p:], None if c is None else w, TL, qG)  # q̈_L = w - Z q̈_G
         if not multipliers:
             return qdd, None
         res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
         _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
         return qdd, band.solve_t(res)
+
+    def _mt(self, mvals: list, T: np.ndarray) -> list[np.ndarray]:
+        """M T_g for every g (work buffers): M_const T from build time plus the varying part."""
+        model, MT = self.model, self._MT
+        if self.C is None:
+            for g in range(len(T)):
+                model.matvec(mvals, T[g], out=MT[g])
+            return MT
+        varying = [
+            [0.0 if c is not None else v for c, v in zip(part.kernel.const, vals, strict=False)]
+            for part, vals in zip(model._dyn, mvals, strict=True)
+        ]
+        for g in range(len(T)):
+            np.copyto(MT[g], self.C[g])
+            model.matvec(varying, T[g], out=MT[g], add=True)
+        return MT
 
 
 def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:

@@ -198,14 +198,21 @@ class StructuredModel:
             bias.append(outs[-1])
         return avals, bias
 
-    def matvec(self, mvals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """M v from evaluated (upper-triangle) mass entries."""
+    def matvec(
+        self, mvals: list, v: np.ndarray, out: np.ndarray | None = None, add: bool = False
+    ) -> np.ndarray:
+        """M v from evaluated (upper-triangle) mass entries; ``add``: out += M v.
+
+        Entries given as the number 0 are skipped (see ``varying_mass``).
+        """
         y = np.zeros(self.n) if out is None else out
-        if out is not None:
+        if out is not None and not add:
             y.fill(0.0)
         tmp = self._scratch()
         for part, vals in zip(self._dyn, mvals, strict=True):
             for (r, c, sym), val in zip(part.upper, vals, strict=True):
+                if np.ndim(val) == 0 and val == 0:
+                    continue
                 add_product(y, r, val, take(c, v), tmp)
                 if sym:
                     add_product(y, c, val, take(r, v), tmp)

@@ -20,7 +20,7 @@ import numpy as np
 
 TABLE = 1024  # table entries per turn; |r| <= π/1024 ≈ 3.1e-3
 LIMIT = 2.0**20  # larger |x|: the C library (the two-part reduction below loses digits beyond)
-BLOCK = 16384  # values per pass, so that every temporary stays in the L1/L2 cache
+BLOCK = 8192  # values per pass, so that every temporary stays in the L1/L2 cache
 
 _H = 2 * math.pi / TABLE
 _INV_H = TABLE / (2 * math.pi)
