@@ -1,14 +1,17 @@
 """sin and cos of one argument array together, in a few cache-resident NumPy passes.
 
 NumPy evaluates float64 ``sin`` and ``cos`` element by element through the C library (about 20 ns
-a value on the 2-core development machine, ten times the cost of ``exp``), and a template such as
-the ring's particle needs both of the same angle. :func:`sincos` shares one argument reduction
-between them: x = j h + r with h = 2π/TABLE, a table of sin(jh) and cos(jh), and short Taylor
-polynomials on |r| <= h/2, combined by the angle-addition formulas. All steps are vectorized
-ufunc passes over blocks that stay in cache; about 0.6 ns a value per pass, 6 ns for both results.
+a value each on the 2-core development machine, ten times the cost of ``exp``), and a template
+such as the ring's particle needs both of the same angle. :func:`sincos` shares one argument
+reduction between them: x = j h + r with h = 2π/TABLE, a table of sin(jh) and cos(jh) (correctly
+rounded), and short Taylor polynomials on |r| <= h/2, combined by the angle-addition formulas with
+the small corrections added last. Every step is a vectorized ufunc pass over a block that stays in
+cache: 27 passes of about 0.4 ns a value, 13 ns a value for both results (measured: 0.22 s for
+2^24 values, against 0.77 s for ``np.sin`` and ``np.cos``).
 
-Accuracy: within 2 ulp of a correctly rounded result (plus 1e-19 absolute) for |x| <= LIMIT; a
-block holding a larger |x|, NaN or infinity is handed to ``np.sin``/``np.cos`` instead.
+Accuracy: absolute error below 1.2e-16 (half an ulp of 1) for |x| <= LIMIT, as measured against
+the C library over random arguments up to LIMIT; a block holding a larger |x|, a NaN or an
+infinity is handed to ``np.sin``/``np.cos`` instead.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import numpy as np
 
 TABLE = 1024  # table entries per turn; |r| <= π/1024 ≈ 3.1e-3
 LIMIT = 2.0**20  # larger |x|: the C library (the two-part reduction below loses digits beyond)
-BLOCK = 8192  # values per pass, so that every temporary stays in the L1/L2 cache
+BLOCK = 32768  # values per pass: temporaries stay in L2, few GIL hand-offs between threads
 
 _H = 2 * math.pi / TABLE
 _INV_H = TABLE / (2 * math.pi)
