@@ -19,7 +19,7 @@ import scipy.sparse.linalg as spla
 
 from .banded import LowerBand
 from .errors import ConstraintError
-from .streams import Index, axpy, dot, indices, scatter_add
+from .streams import Index, add_product, axpy, dot, dot3, indices, scatter_add, take
 
 P_MAX = 32  # ordinary coordinates for the dense projected system
 W_MAX = 8  # bandwidth of the triangular constraint structure
@@ -107,6 +107,7 @@ class TriangularSolver:
             if not self.var_border:
                 self.T = self._t(self.band, self.G0)
                 self.C = self._const_mt(self.T)
+                self.TC = self.T @ self.C.T  # Tᵀ M_const T, (p, p)
 
     def _const_mt(self, T: np.ndarray) -> np.ndarray:
         """M_const T: the state-independent mass entries times T, rows (p, n)."""
@@ -166,8 +167,12 @@ class TriangularSolver:
             self._v[p:] = w
             r0 = f - model.matvec(mvals, self._v)
         fl = None if c is None and self.f_local_zero else r0[p:]
-        MT = self._mt(mvals, T)
-        Mr = np.array([[MT[g][h] + dot(TL[h], MT[g][p:]) for g in range(p)] for h in range(p)])
+        fused = c is None and self.C is not None
+        if fused:  # TᵀMT = Tᵀ M_const T (build time) + Tᵀ M_varying T: M T never formed
+            Mr = self.TC + self._varying_form(mvals, T)
+        else:
+            MT = self._mt(mvals, T)
+            Mr = np.array([[MT[g][h] + dot(TL[h], MT[g][p:]) for g in range(p)] for h in range(p)])
         rr = np.array([r0[h] + (0.0 if fl is None else dot(TL[h], fl)) for h in range(p)])
         try:
             qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
@@ -182,8 +187,43 @@ class TriangularSolver:
         if not multipliers:
             return qdd, None
         res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
-        _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
+        if fused:  # = (M_const T qG)_L + (M_varying q̈)_L - f_L, as q̈ = T qG here
+            _combine(res, None if fl is None else -fl, self.C[:, p:], qG)  # type: ignore[index]
+            self._varying_rows(mvals, qdd)
+        else:
+            _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
         return qdd, band.solve_t(res)
+
+    def _varying(self, mvals: list):
+        """(row, col, symmetric, values) of every state-dependent mass entry."""
+        for part, vals in zip(self.model._dyn, mvals, strict=True):
+            for (r, c, sym), val, const in zip(part.upper, vals, part.kernel.const, strict=False):
+                if const is None:
+                    yield r, c, sym, val
+
+    def _varying_form(self, mvals: list, T: np.ndarray) -> np.ndarray:
+        """Tᵀ M_varying T, (p, p), entry by entry without forming M T."""
+        p = len(T)
+        out = np.zeros((p, p))
+        tmp = self.model._scratch()
+        for r, c, sym, val in self._varying(mvals):
+            for h in range(p):
+                for g in range(h, p):
+                    x = dot3(val, take(r, T[h]), take(c, T[g]), tmp)
+                    if sym:
+                        x += x if g == h else dot3(val, take(c, T[h]), take(r, T[g]), tmp)
+                    out[h, g] += x
+                    if g != h:
+                        out[g, h] += x
+        return out
+
+    def _varying_rows(self, mvals: list, qdd: np.ndarray) -> None:
+        """self._v[p:] += (M_varying q̈)_L: entries whose row is an ordinary coordinate skipped."""
+        p, v, tmp = self.plan.p, self._v, self.model._scratch()
+        for r, c, sym, val in self._varying(mvals):
+            for row, col in ((r, c), (c, r)) if sym else ((r, c),):
+                if not (isinstance(row, Index) and row.fixed and row.start < p):
+                    add_product(v, row, val, take(col, qdd), tmp)
 
     def _mt(self, mvals: list, T: np.ndarray) -> list[np.ndarray]:
         """M T_g for every g (work buffers): M_const T from build time plus the varying part."""

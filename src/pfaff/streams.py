@@ -158,6 +158,25 @@ def dot(vals: np.ndarray | float, x: np.ndarray | float) -> float:
     return float(vals) * float(x)  # type: ignore[arg-type]
 
 
+def dot3(
+    vals: np.ndarray | float, a: np.ndarray | float, b: np.ndarray | float, tmp: np.ndarray
+) -> float:
+    """Σ_i vals_i a_i b_i, scalars standing for constant arrays; ``tmp``: scratch, as long."""
+    arrays = [x for x in (vals, a, b) if np.ndim(x)]
+    scale = math.prod(float(x) for x in (vals, a, b) if not np.ndim(x))  # type: ignore[arg-type]
+    if len(arrays) < 3:
+        if not arrays:
+            return scale
+        return scale * dot(*arrays) if len(arrays) == 2 else scale * float(np.sum(arrays[0]))
+    n = np.shape(vals)[0]
+    total = 0.0
+    for lo in range(0, n, BLAS_BLOCK):
+        t_ = tmp[: min(BLAS_BLOCK, n - lo)]
+        np.multiply(vals[lo : lo + BLAS_BLOCK], a[lo : lo + BLAS_BLOCK], out=t_)  # type: ignore[index]
+        total += float(np.dot(t_, b[lo : lo + BLAS_BLOCK]))  # type: ignore[index]
+    return total
+
+
 def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
     """y += a x in place (1-D, contiguous), one pass, in blocks (see :data:`BLAS_BLOCK`)."""
     for lo in range(0, y.shape[0], BLAS_BLOCK):
