@@ -7,6 +7,12 @@ fill-in budgets beyond), LAPACK's tridiagonal Cholesky of the Schur complement A
 triangular path needs neither a factorization nor an inverse of M, so it is the fast path; SuperLU
 with a reused fill-reducing ordering is the general fallback. CHOLMOD (scikit-sparse) and qdldl
 would need a compiled dependency for a path that is not the fast one, so they are not used.
+
+When the constraint Jacobian is constant (the ring's), T = [I; -A_L⁻¹A_G] and M_const T are made
+at build time and a solve touches only the state-dependent mass entries: TᵀMT is summed entry by
+entry and M T is never formed, so a solve for q̈ alone (the integrators' right-hand side) streams
+the varying entries, q̈ and T once each. Level-1 BLAS runs in blocks below OpenBLAS's threading
+threshold (see :data:`pfaff.streams.BLAS_BLOCK`).
 """
 
 from __future__ import annotations

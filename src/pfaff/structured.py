@@ -5,6 +5,10 @@ Same contract as :class:`pfaff.NumericModel` (``accelerations``, ``constraint_re
 assembled for a solve: each template contributes *streams* of entries (a value per instance at
 global row ``start + step*i`` and column ``start' + step'*i``), applied with slice arithmetic.
 
+Kernels (:class:`pfaff.streams.StreamKernel`) evaluate each template over chunks of instances on
+two threads, take sin and cos of an angle together (:mod:`pfaff.trig`), and reduce outputs that
+only count summed (a force on an ordinary coordinate, energies) without storing them.
+
 Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.solvers`):
 
 ``triangular``
