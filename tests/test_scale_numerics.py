@@ -141,3 +141,14 @@ def test_fused_triangular_path_matches_superlu(n: int) -> None:
         np.testing.assert_allclose(a[1], b[1], rtol=1e-9, atol=1e-9)
     qdd, _ = tri._solve_accelerations(0.0, q, qd, multipliers=False)
     np.testing.assert_allclose(qdd, lu.accelerations(0.0, q, qd)[0], rtol=1e-9, atol=1e-9)
+
+
+def test_ode_function_refuses_non_finite_accelerations() -> None:
+    model = _ring(64)
+    q, qd = pfaff.models.ring_state(64, 0.5, theta=1.0, theta_dot=0.5)
+    fun = model._ode_function()
+    y = np.concatenate([q, qd])
+    np.testing.assert_allclose(fun(0.0, y)[65 + 1 :], 3.0 / (2 * 2.0 * 0.5), rtol=1e-12)
+    y[70] = np.inf
+    with np.errstate(invalid="ignore"), pytest.raises(pfaff.StateError, match="NaN or infinite"):
+        fun(0.25, y)

@@ -26,13 +26,14 @@ Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.solvers
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sps
 
 from .codegen import constraint_layout, energy_exprs
-from .errors import ModelError
+from .errors import ModelError, StateError
 from .family import LazySeq
 from .numeric import check_state
 from .solvers import SparseSolver, TriangularSolver, triangular_plan
@@ -342,6 +343,8 @@ class StructuredModel:
             out = np.empty(2 * n)
             out[:n] = y[n:]
             self._solve_accelerations(t, y[:n], y[n:], alpha, beta, out[n:], multipliers=False)
+            if not math.isfinite(float(np.sum(out[n:]))):  # q̈ was just written: still in cache
+                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
             return out
 
         return fun
