@@ -152,3 +152,21 @@ def test_ode_function_refuses_non_finite_accelerations() -> None:
     y[70] = np.inf
     with np.errstate(invalid="ignore"), pytest.raises(pfaff.StateError, match="NaN or infinite"):
         fun(0.25, y)
+
+
+def test_streaming_passes_in_spans(monkeypatch: pytest.MonkeyPatch) -> None:
+    """axpy and scale over the threads (small spans forced) equal the one-thread results."""
+    monkeypatch.setattr(streams, "PARALLEL_FROM", 100)
+    monkeypatch.setattr(streams, "SPAN", 64)
+    monkeypatch.setattr(streams, "_THREAD", __import__("threading").local())
+    rng = np.random.default_rng(4)
+    x, y = rng.normal(size=1000), rng.normal(size=1000)
+    expect = y + 0.25 * x
+    streams.axpy(0.25, x, y)
+    np.testing.assert_allclose(y, expect, rtol=1e-15)
+    out = np.empty(1000)
+    streams.scale(x, -3.0, out)
+    np.testing.assert_array_equal(out, -3.0 * x)
+    seen: list = []
+    streams.in_spans(1000, 64, lambda lo, hi: seen.append((lo, hi)))
+    assert sorted(seen) == [(lo, min(lo + 64, 1000)) for lo in range(0, 1000, 64)]

@@ -25,7 +25,7 @@ import scipy.sparse.linalg as spla
 
 from .banded import LowerBand
 from .errors import ConstraintError
-from .streams import Index, add_product, axpy, dot, dot3, indices, scatter_add, take
+from .streams import Index, add_product, axpy, dot, dot3, indices, scale, scatter_add, take
 
 P_MAX = 32  # ordinary coordinates for the dense projected system
 W_MAX = 8  # bandwidth of the triangular constraint structure
@@ -254,7 +254,7 @@ def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
     if base is not None:
         out[:] = base
     elif len(coef):
-        np.multiply(vecs[0], coef[0], out=out)
+        scale(vecs[0], float(coef[0]), out)
         start = 1
     else:
         out.fill(0.0)

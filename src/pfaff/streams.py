@@ -13,7 +13,7 @@ import itertools
 import math
 import os
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -33,7 +33,9 @@ PARALLEL_FROM = 1 << 20
 # elements (a solve at N = 65536 took 16 ms instead of 2.7 ms) and compete with the kernel threads.
 BLAS_BLOCK = 8192
 SINCOS_FROM = 1 << 12  # kernels over this many instances take sin and cos from trig.sincos
+SPAN = 1 << 17  # elements per task of the streaming passes run on the threads (1 MiB)
 _POOL: ThreadPoolExecutor | None = None
+_THREAD = threading.local()
 
 
 def _pool() -> ThreadPoolExecutor:
@@ -41,6 +43,36 @@ def _pool() -> ThreadPoolExecutor:
     if _POOL is None:
         _POOL = ThreadPoolExecutor(THREADS - 1, thread_name_prefix="pfaff-kernel")
     return _POOL
+
+
+def in_spans(count: int, step: int, fn: Callable[[int, int], None]) -> None:
+    """fn(lo, hi) over [0, count) in spans of ``step``: on THREADS threads from PARALLEL_FROM on.
+
+    Spans are handed out one at a time, so a thread slowed down (a busy core) takes fewer. ``fn``
+    must release the GIL for most of its time (NumPy ufuncs do) to gain from the threads.
+    """
+    if count < PARALLEL_FROM or THREADS < 2:
+        for lo in range(0, count, step):
+            fn(lo, min(lo + step, count))
+        return
+    spans, last = itertools.count(), (count - 1) // step
+
+    def work() -> None:
+        while (i := next(spans)) <= last:  # next() on a count is atomic under the GIL
+            fn(i * step, min((i + 1) * step, count))
+
+    helpers = [_pool().submit(work) for _ in range(THREADS - 1)]
+    work()
+    for h in helpers:
+        h.result()
+
+
+def _span_scratch() -> np.ndarray:
+    """A SPAN-long scratch vector of the calling thread."""
+    buf = getattr(_THREAD, "span", None)
+    if buf is None:
+        buf = _THREAD.span = np.empty(SPAN)
+    return buf
 
 
 @dataclass(frozen=True)
@@ -178,9 +210,27 @@ def dot3(
 
 
 def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
-    """y += a x in place (1-D, contiguous), one pass, in blocks (see :data:`BLAS_BLOCK`)."""
-    for lo in range(0, y.shape[0], BLAS_BLOCK):
+    """y += a x in place (1-D, contiguous), one pass, in blocks (see :data:`BLAS_BLOCK`).
+
+    Long vectors go in spans over the threads, with ufuncs (SciPy's daxpy keeps the GIL).
+    """
+    n = y.shape[0]
+    if n >= PARALLEL_FROM and THREADS > 1:
+
+        def span(lo: int, hi: int) -> None:
+            t_ = _span_scratch()[: hi - lo]
+            np.multiply(x[lo:hi], a, out=t_)
+            np.add(y[lo:hi], t_, out=y[lo:hi])
+
+        in_spans(n, SPAN, span)
+        return
+    for lo in range(0, n, BLAS_BLOCK):
         blas.daxpy(x[lo : lo + BLAS_BLOCK], y[lo : lo + BLAS_BLOCK], a=a)
+
+
+def scale(x: np.ndarray, a: float, out: np.ndarray) -> None:
+    """out = a x (1-D), in spans over the threads for long vectors."""
+    in_spans(out.shape[0], SPAN, lambda lo, hi: np.multiply(x[lo:hi], a, out=out[lo:hi]))
 
 
 class StreamKernel:
@@ -310,21 +360,7 @@ class StreamKernel:
         if self._out is None:
             self._out = np.empty((self._n_stored, self.count))
         out = self._out
-        if self.count >= PARALLEL_FROM and THREADS > 1:
-            # chunks handed out one at a time: a thread slowed down (a busy core) takes fewer
-            chunks = itertools.count()
-            step, last = self.chunk, (self.count - 1) // self.chunk
-
-            def work() -> None:
-                while (i := next(chunks)) <= last:  # next() on a count is atomic under the GIL
-                    self._run(t_, q, qd, i * step, min((i + 1) * step, self.count))
-
-            helpers = [_pool().submit(work) for _ in range(THREADS - 1)]
-            work()
-            for h in helpers:
-                h.result()
-        else:
-            self._run(t_, q, qd, 0, self.count)
+        in_spans(self.count, self.chunk, lambda lo, hi: self._run(t_, q, qd, lo, hi))
         res: list = list(self.const)
         for j, i in zip(self._slot, self.varying, strict=True):
             res[i] = out[j] if j >= 0 else math.fsum(self._partial[-1 - j])
