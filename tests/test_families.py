@@ -200,3 +200,24 @@ def test_simulate_family_ring_closed_form() -> None:
     np.testing.assert_allclose(
         traj.energy - traj.energy[0], 2.0 * (traj.q[:, 0] - q0[0]), atol=1e-9
     )
+
+
+def test_simulate_chain_family_projects_onto_nonlinear_constraints() -> None:
+    """The SuperLU path in a projected run: Newton steps on |link| = 1, energy kept."""
+    n = 6
+    s = pfaff.System()
+    x, y = s.add_family("x", n), s.add_family("y", n)
+    s.add_particle(1, [x[k], y[k]], over=k)
+    s.add_potential_energy(9.81 * y[k], over=k)
+    s.add_holonomic_constraint(x[0] ** 2 + y[0] ** 2 - 1, name="pin")
+    s.add_holonomic_constraint(
+        (x[k + 1] - x[k]) ** 2 + (y[k + 1] - y[k]) ** 2 - 1, "link", over=(k, 0, n - 2)
+    )
+    model = s.equations().compile({})
+    q = np.concatenate([np.arange(1, n + 1.0), np.zeros(n)])
+    traj = pfaff.simulate(model, q, np.zeros(2 * n), (0, 0.5), t_eval=[0, 0.25, 0.5])
+    assert model.solver == "sparse" and traj.status == "success"
+    assert traj.stats["projections"] > 0
+    assert np.abs(traj.constraint_residual).max() < 1e-10
+    np.testing.assert_allclose(traj.energy, traj.energy[0], atol=1e-8)
+    assert traj.q[-1, 2 * n - 1] < -1.0  # the free end has fallen
