@@ -364,12 +364,15 @@ class StructuredModel:
         dict
             ``qdd`` (k, n), ``multipliers`` (k, m), ``f`` and ``g`` (k, m), and (k,) arrays ``T``,
             ``V``, ``T0`` = T(q, 0, t) and ``T2`` (the part of T quadratic in q̇). One kernel pass
-            per state for the energies (T, V, T₀ and T₂ together).
+            per state for the energies (T, V, T₀ and T₂ together). ``f`` and ``g`` are views of
+            ``residual`` (k, 2, m), the layout of ``Trajectory.constraint_residual``, so that a
+            caller can keep it without a copy.
         """
         t = np.asarray(t, dtype=float)
         k = len(t)
         out = {"qdd": np.empty((k, self.n)), "multipliers": np.empty((k, self.m))}
-        out |= {key: np.empty((k, self.m)) for key in ("f", "g")}
+        out["residual"] = np.empty((k, 2, self.m))  # f and g below are views of it
+        out["f"], out["g"] = out["residual"][:, 0], out["residual"][:, 1]
         out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
         for i in range(k):
             ti, qi, qdi = self._state(t[i], q[i], qd[i])
