@@ -51,7 +51,8 @@ def in_spans(count: int, step: int, fn: Callable[[int, int], None]) -> None:
     Spans are handed out one at a time, so a thread slowed down (a busy core) takes fewer. ``fn``
     must release the GIL for most of its time (NumPy ufuncs do) to gain from the threads.
     """
-    if count < PARALLEL_FROM or THREADS < 2:
+    nested = threading.current_thread().name.startswith("pfaff-kernel")  # never wait on itself
+    if count < PARALLEL_FROM or THREADS < 2 or nested:
         for lo in range(0, count, step):
             fn(lo, min(lo + step, count))
         return
