@@ -12,7 +12,9 @@ it, and measures:
     the memory-bandwidth floor measured in the same process: the best time to copy with NumPy
     (``ndarray.copy``) every array the solve cannot avoid touching once: the state q and q̇, the
     results q̈ and λ, and the model's state-dependent matrix arrays (the values of M and A that vary
-    with q, one array per varying template output); ``solve/floor`` is the ratio
+    with q, one array per stored varying template output; an output needed only summed, such as
+    the forcing on x, is reduced in cache and never streamed); ``solve/floor`` is the ratio.
+    The copies run on one thread, the solve's kernels on two
 ``spsolve``
     the same solve written by hand: K = [[M, Aᵀ], [A, 0]] from the model's sparse M and A, then
     ``scipy.sparse.linalg.spsolve(K, rhs)``, seconds for spsolve alone (N <= --spsolve-max)

@@ -153,3 +153,71 @@ def test_memory_estimate_refuses_before_allocating() -> None:
     ring = pfaff.models.rolling_ring(2**31 - 2, force=True)
     with pytest.raises(pfaff.ModelError, match="GiB"):
         ring.equations()
+
+
+def test_evaluate_states_matches_explicit_model() -> None:
+    """What a trajectory reports (q̈, λ, f, g, T, V, T0, T2) at k states, family vs explicit."""
+    n, vals = 6, {"M": 1.3, "r": 0.4, "F": -0.8, "g": 9.81, "alpha": 0.2}
+    a, b = _pair(n, force=True, incline=True)
+    ma, mb = a.compile(vals), b.compile(vals)
+    assert hasattr(ma, "evaluate_states") and mb.solver == "triangular"
+    rng = np.random.default_rng(7)
+    ts = np.array([0.0, 0.5, 1.0])
+    Q = np.stack([pfaff.models.ring_state(n, 0.4, theta=th)[0] for th in (0.1, 1.0, 2.0)])
+    QD = rng.normal(0, 1.0, Q.shape)  # velocities off the manifold: g is not zero
+    ea, eb = ma.evaluate_states(ts, Q, QD), mb.evaluate_states(ts, Q, QD)
+    for key in ("qdd", "multipliers", "f", "g", "T", "V", "T0", "T2"):
+        np.testing.assert_allclose(eb[key], ea[key], rtol=1e-11, atol=1e-12, err_msg=key)
+    np.testing.assert_allclose(eb["T2"], eb["T"], rtol=1e-12)  # T is quadratic in q̇ here
+
+
+def test_project_counts_only_real_corrections() -> None:
+    n = 40
+    model = pfaff.models.rolling_ring(n, family=True).equations().compile({"M": 1, "r": 0.5})
+    q, qd = pfaff.models.ring_state(n, 0.5, theta=0.3, theta_dot=1.0)
+    q1, qd1, its = model.project(0.0, q, qd)  # on the manifold: nothing to do
+    assert its == 0
+    np.testing.assert_array_equal(q1, q)
+    np.testing.assert_array_equal(qd1, qd)
+    q2, qd2, its = model.project(0.0, q, qd + 0.01)  # the velocities alone are off
+    _, g = model.constraint_residual(0.0, q2, qd2)
+    assert its == 1 and np.max(np.abs(g)) < 1e-12
+    np.testing.assert_array_equal(q2, q)
+
+
+def test_simulate_family_ring_closed_form() -> None:
+    """x(t) = F t²/(4M) and λ_1 = -F/2 along a projected run with shared-trig kernels."""
+    n = 4096
+    model = pfaff.models.rolling_ring(n, force=2.0).equations().compile({"M": 1.0, "r": 0.5})
+    assert model._dyn[0].kernel.angles
+    q0, qd0 = pfaff.models.ring_state(n, 0.5, theta=np.pi)
+    traj = pfaff.simulate(model, q0, qd0, (0.0, 0.2), max_step=0.02, t_eval=[0.0, 0.1, 0.2])
+    assert traj.status == "success" and traj.stats["steps"] >= 10
+    np.testing.assert_allclose(traj.q[:, 0], q0[0] + 2.0 * traj.t**2 / 4, atol=1e-9)
+    np.testing.assert_allclose(traj.qdd[:, 1:], 2.0, rtol=1e-9)
+    np.testing.assert_allclose(traj.multipliers[:, 0], -1.0, rtol=1e-9)
+    assert np.abs(traj.constraint_residual).max() <= 1e-9
+    np.testing.assert_allclose(
+        traj.energy - traj.energy[0], 2.0 * (traj.q[:, 0] - q0[0]), atol=1e-9
+    )
+
+
+def test_simulate_chain_family_projects_onto_nonlinear_constraints() -> None:
+    """The SuperLU path in a projected run: Newton steps on |link| = 1, energy kept."""
+    n = 6
+    s = pfaff.System()
+    x, y = s.add_family("x", n), s.add_family("y", n)
+    s.add_particle(1, [x[k], y[k]], over=k)
+    s.add_potential_energy(9.81 * y[k], over=k)
+    s.add_holonomic_constraint(x[0] ** 2 + y[0] ** 2 - 1, name="pin")
+    s.add_holonomic_constraint(
+        (x[k + 1] - x[k]) ** 2 + (y[k + 1] - y[k]) ** 2 - 1, "link", over=(k, 0, n - 2)
+    )
+    model = s.equations().compile({})
+    q = np.concatenate([np.arange(1, n + 1.0), np.zeros(n)])
+    traj = pfaff.simulate(model, q, np.zeros(2 * n), (0, 0.5), t_eval=[0, 0.25, 0.5])
+    assert model.solver == "sparse" and traj.status == "success"
+    assert traj.stats["projections"] > 0
+    assert np.abs(traj.constraint_residual).max() < 1e-10
+    np.testing.assert_allclose(traj.energy, traj.energy[0], atol=1e-8)
+    assert traj.q[-1, 2 * n - 1] < -1.0  # the free end has fallen

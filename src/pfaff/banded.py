@@ -100,8 +100,12 @@ class LowerBand:
         R, w, i0 = self.R, self.w, self.head
         a = R[:, -1]
         if self.method == "cumsum":  # z_i = c_i / a0 + z_(i+1): a running sum from the end
-            rev = np.multiply(c[::-1], 1.0 / a[0])
-            np.cumsum(rev[: self.m - i0], axis=0, out=rev[: self.m - i0])
+            if a[0] == 1.0:  # the ring's spacing rows: no scaling pass
+                rev = np.empty_like(c, dtype=float)
+                np.cumsum(c[::-1][: self.m - i0], axis=0, out=rev[: self.m - i0])  # head: below
+            else:
+                rev = np.multiply(c[::-1], 1.0 / a[0])
+                np.cumsum(rev[: self.m - i0], axis=0, out=rev[: self.m - i0])
             z = rev[::-1]
         else:
             z = np.empty_like(c, dtype=float)

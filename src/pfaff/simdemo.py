@@ -31,9 +31,14 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
     }
 
 
+# A reported state costs 48 n bytes (q, q̇, q̈, λ, f, g): 401 of them at n = 2^20 would be 20 GB.
+TRAJECTORY_BYTES = 1 << 30
+
+
 def _run(model: Any, q0, qd0, opts: dict) -> tuple[Trajectory, float]:
     t0 = time.perf_counter()
-    t_eval = np.linspace(0.0, opts["t_end"], opts.get("points", 401))
+    fit = max(11, TRAJECTORY_BYTES // (48 * (model.n + model.m)))
+    t_eval = np.linspace(0.0, opts["t_end"], opts.get("points", min(401, fit)))
     traj = simulate(
         model, q0, qd0, (0.0, opts["t_end"]), method=opts["method"],
         rtol=opts["rtol"], atol=opts["atol"], t_eval=t_eval, progress=None,

@@ -7,6 +7,12 @@ fill-in budgets beyond), LAPACK's tridiagonal Cholesky of the Schur complement A
 triangular path needs neither a factorization nor an inverse of M, so it is the fast path; SuperLU
 with a reused fill-reducing ordering is the general fallback. CHOLMOD (scikit-sparse) and qdldl
 would need a compiled dependency for a path that is not the fast one, so they are not used.
+
+When the constraint Jacobian is constant (the ring's), T = [I; -A_L⁻¹A_G] and M_const T are made
+at build time and a solve touches only the state-dependent mass entries: TᵀMT is summed entry by
+entry and M T is never formed, so a solve for q̈ alone (the integrators' right-hand side) streams
+the varying entries, q̈ and T once each. Level-1 BLAS runs in blocks below OpenBLAS's threading
+threshold (see :data:`pfaff.streams.BLAS_BLOCK`).
 """
 
 from __future__ import annotations
@@ -14,13 +20,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg.blas as blas
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from .banded import LowerBand
 from .errors import ConstraintError
-from .streams import Index, indices, scatter_add
+from .streams import Index, add_product, axpy, dot, dot3, indices, scale, scatter_add, take
 
 P_MAX = 32  # ordinary coordinates for the dense projected system
 W_MAX = 8  # bandwidth of the triangular constraint structure
@@ -101,35 +106,65 @@ class TriangularSolver:
         for x in [self._v, *self._MT]:
             x.fill(0.0)
         self.band = None if self.var_band else LowerBand(self.R0, constant=True)
-        self.Z = None
+        self.T: np.ndarray | None = None  # T = [I; -Z], rows (p, n), when constant
+        self.C: np.ndarray | None = None  # M_const T, rows (p, n), when T is constant
         if self.band is not None:
             self.band.check()
             if not self.var_border:
-                self.Z = self._z(self.band, self.G0)
+                self.T = self._t(self.band, self.G0)
+                self.C = self._const_mt(self.T)
+                self.TC = self.T @ self.C.T  # Tᵀ M_const T, (p, p)
 
-    def _z(self, band: LowerBand, G: np.ndarray) -> np.ndarray:
-        """Z = A_L⁻¹ A_G, stored as rows (p, m)."""
-        return np.ascontiguousarray(band.solve(G.T).T) if G.size else G
+    def _const_mt(self, T: np.ndarray) -> np.ndarray:
+        """M_const T: the state-independent mass entries times T, rows (p, n)."""
+        model = self.model
+        const = [
+            [0.0 if c is None else c for c in part.kernel.const[: len(part.upper)]]
+            for part in model._dyn
+        ]
+        return np.array([model.matvec(const, T[g]) for g in range(len(T))]).reshape(T.shape)
+
+    def _t(self, band: LowerBand, G: np.ndarray) -> np.ndarray:
+        """T = [I; -A_L⁻¹ A_G] as rows (p, n): a basis of the null space of A."""
+        p, m = G.shape
+        T = np.zeros((p, p + m))
+        T[:, :p] = np.eye(p)
+        if p:
+            T[:, p:] = band.solve(G.T).T
+            np.negative(T[:, p:], out=T[:, p:])
+        return T
 
     def _current(self, avals: list) -> tuple[LowerBand, np.ndarray]:
-        band, Z = self.band, self.Z
+        band, T = self.band, self.T
         if band is None:
             R = self.R0.copy()
             for bi, ei, off, rows in self.var_band:
                 scatter_add(R[off], rows, avals[bi][ei])
             band = LowerBand(R, constant=False)
             band.check()
-        if Z is None:
+        if T is None:
             G = self.G0.copy()
             for bi, ei, g, rows in self.var_border:
                 scatter_add(G[g], rows, avals[bi][ei])
-            Z = self._z(band, G)
-        return band, Z
+            T = self._t(band, G)
+        return band, T
 
-    def solve(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> tuple:
-        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
+    def solve(
+        self,
+        mvals: list,
+        f: np.ndarray,
+        avals: list,
+        c: np.ndarray | None,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero).
+
+        q̈ is written to ``out`` when given; λ is None unless ``multipliers``.
+        """
         model, p = self.model, self.plan.p
-        band, Z = self._current(avals)
+        band, T = self._current(avals)
+        TL = T[:, p:]  # -Z
         n = model.n
         r0 = f
         if c is not None:  # w = A_L⁻¹ c; f - M[0; w]
@@ -138,15 +173,13 @@ class TriangularSolver:
             self._v[p:] = w
             r0 = f - model.matvec(mvals, self._v)
         fl = None if c is None and self.f_local_zero else r0[p:]
-        MT = self._MT
-        for g in range(p):  # M T, T = [I; -Z]
-            v = self._v
-            v[:p] = 0.0
-            v[g] = 1.0
-            np.negative(Z[g], out=v[p:])
-            model.matvec(mvals, v, out=MT[g])
-        Mr = np.array([[MT[g][h] - Z[h] @ MT[g][p:] for g in range(p)] for h in range(p)])
-        rr = np.array([r0[h] - (0.0 if fl is None else Z[h] @ fl) for h in range(p)])
+        fused = c is None and self.C is not None
+        if fused:  # TᵀMT = Tᵀ M_const T (build time) + Tᵀ M_varying T: M T never formed
+            Mr = self.TC + self._varying_form(mvals, T)
+        else:
+            MT = self._mt(mvals, T)
+            Mr = np.array([[MT[g][h] + dot(TL[h], MT[g][p:]) for g in range(p)] for h in range(p)])
+        rr = np.array([r0[h] + (0.0 if fl is None else dot(TL[h], fl)) for h in range(p)])
         try:
             qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
         except np.linalg.LinAlgError as e:
@@ -154,12 +187,65 @@ class TriangularSolver:
                 "the projected mass matrix TᵀMT is singular: a coordinate without inertia on "
                 "the admissible motions"
             ) from e
-        qdd = np.empty(n)
+        qdd = np.empty(n) if out is None else out
         qdd[:p] = qG
-        _combine(qdd[p:], None if c is None else w, Z, -qG)  # q̈_L = w - Z q̈_G
+        _combine(qdd[p:], None if c is None else w, TL, qG)  # q̈_L = w - Z q̈_G
+        if not multipliers:
+            return qdd, None
         res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
-        _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
+        if fused:  # = (M_const T qG)_L + (M_varying q̈)_L - f_L, as q̈ = T qG here
+            _combine(res, None if fl is None else -fl, self.C[:, p:], qG)  # type: ignore[index]
+            self._varying_rows(mvals, qdd)
+        else:
+            _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
         return qdd, band.solve_t(res)
+
+    def _varying(self, mvals: list):
+        """(row, col, symmetric, values) of every state-dependent mass entry."""
+        for part, vals in zip(self.model._dyn, mvals, strict=True):
+            for (r, c, sym), val, const in zip(part.upper, vals, part.kernel.const, strict=False):
+                if const is None:
+                    yield r, c, sym, val
+
+    def _varying_form(self, mvals: list, T: np.ndarray) -> np.ndarray:
+        """Tᵀ M_varying T, (p, p), entry by entry without forming M T."""
+        p = len(T)
+        out = np.zeros((p, p))
+        tmp = self.model._scratch()
+        for r, c, sym, val in self._varying(mvals):
+            for h in range(p):
+                for g in range(h, p):
+                    x = dot3(val, take(r, T[h]), take(c, T[g]), tmp)
+                    if sym:
+                        x += x if g == h else dot3(val, take(c, T[h]), take(r, T[g]), tmp)
+                    out[h, g] += x
+                    if g != h:
+                        out[g, h] += x
+        return out
+
+    def _varying_rows(self, mvals: list, qdd: np.ndarray) -> None:
+        """self._v[p:] += (M_varying q̈)_L: entries whose row is an ordinary coordinate skipped."""
+        p, v, tmp = self.plan.p, self._v, self.model._scratch()
+        for r, c, sym, val in self._varying(mvals):
+            for row, col in ((r, c), (c, r)) if sym else ((r, c),):
+                if not (isinstance(row, Index) and row.fixed and row.start < p):
+                    add_product(v, row, val, take(col, qdd), tmp)
+
+    def _mt(self, mvals: list, T: np.ndarray) -> list[np.ndarray]:
+        """M T_g for every g (work buffers): M_const T from build time plus the varying part."""
+        model, MT = self.model, self._MT
+        if self.C is None:
+            for g in range(len(T)):
+                model.matvec(mvals, T[g], out=MT[g])
+            return MT
+        varying = [
+            [0.0 if c is not None else v for c, v in zip(part.kernel.const, vals, strict=False)]
+            for part, vals in zip(model._dyn, mvals, strict=True)
+        ]
+        for g in range(len(T)):
+            np.copyto(MT[g], self.C[g])
+            model.matvec(varying, T[g], out=MT[g], add=True)
+        return MT
 
 
 def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
@@ -168,12 +254,12 @@ def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
     if base is not None:
         out[:] = base
     elif len(coef):
-        np.multiply(vecs[0], coef[0], out=out)
+        scale(vecs[0], float(coef[0]), out)
         start = 1
     else:
         out.fill(0.0)
     for g in range(start, len(coef)):
-        blas.daxpy(vecs[g], out, a=float(coef[g]))
+        axpy(float(coef[g]), vecs[g], out)
 
 
 class SparseSolver:
@@ -217,8 +303,16 @@ class SparseSolver:
         self.indices = row[order]
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(col, minlength=N))])
 
-    def solve(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> tuple:
-        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero)."""
+    def solve(
+        self,
+        mvals: list,
+        f: np.ndarray,
+        avals: list,
+        c: np.ndarray | None,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero); see TriangularSolver."""
         model = self.model
         data = []
         for part, vals in zip(model._dyn, mvals, strict=True):
@@ -250,7 +344,11 @@ class SparseSolver:
             ) from e
         if not np.all(np.isfinite(sol)):
             raise ConstraintError("the augmented matrix [[M, Aᵀ], [A, 0]] is singular")
-        return sol[: model.n], -sol[model.n :]
+        qdd = sol[: model.n]
+        if out is not None:
+            out[:] = qdd
+            qdd = out
+        return qdd, -sol[model.n :] if multipliers else None
 
 
 def _count(a, b) -> int:

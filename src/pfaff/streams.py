@@ -9,30 +9,71 @@ stay in cache.
 
 from __future__ import annotations
 
+import itertools
+import math
 import os
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from itertools import pairwise
 
 import numpy as np
 import scipy.linalg.blas as blas
 import sympy as sp
 
 from .symbols import local_q, local_qd, t
+from .trig import sincos, workspace
 
 CHUNK = 1 << 15  # instances per kernel call
 # NumPy releases the GIL inside ufunc loops: large kernels run their chunks on THREADS threads.
 THREADS = min(2, os.cpu_count() or 1)
 PARALLEL_FROM = 1 << 20
+# OpenBLAS runs level-1 calls (daxpy, ddot) below 10,000 elements on the calling thread; on longer
+# vectors it wakes its own threads, whose wake-up and spin-wait cost more than the call at 2^16
+# elements (a solve at N = 65536 took 16 ms instead of 2.7 ms) and compete with the kernel threads.
+BLAS_BLOCK = 8192
+SINCOS_FROM = 1 << 12  # kernels over this many instances take sin and cos from trig.sincos
+SPAN = 1 << 17  # elements per task of the streaming passes run on the threads (1 MiB)
 _POOL: ThreadPoolExecutor | None = None
+_THREAD = threading.local()
 
 
 def _pool() -> ThreadPoolExecutor:
     global _POOL
     if _POOL is None:
-        _POOL = ThreadPoolExecutor(THREADS, thread_name_prefix="pfaff-kernel")
+        _POOL = ThreadPoolExecutor(THREADS - 1, thread_name_prefix="pfaff-kernel")
     return _POOL
+
+
+def in_spans(count: int, step: int, fn: Callable[[int, int], None]) -> None:
+    """fn(lo, hi) over [0, count) in spans of ``step``: on THREADS threads from PARALLEL_FROM on.
+
+    Spans are handed out one at a time, so a thread slowed down (a busy core) takes fewer. ``fn``
+    must release the GIL for most of its time (NumPy ufuncs do) to gain from the threads.
+    """
+    nested = threading.current_thread().name.startswith("pfaff-kernel")  # never wait on itself
+    if count < PARALLEL_FROM or THREADS < 2 or nested:
+        for lo in range(0, count, step):
+            fn(lo, min(lo + step, count))
+        return
+    spans, last = itertools.count(), (count - 1) // step
+
+    def work() -> None:
+        while (i := next(spans)) <= last:  # next() on a count is atomic under the GIL
+            fn(i * step, min((i + 1) * step, count))
+
+    helpers = [_pool().submit(work) for _ in range(THREADS - 1)]
+    work()
+    for h in helpers:
+        h.result()
+
+
+def _span_scratch() -> np.ndarray:
+    """A SPAN-long scratch vector of the calling thread."""
+    buf = getattr(_THREAD, "span", None)
+    if buf is None:
+        buf = _THREAD.span = np.empty(SPAN)
+    return buf
 
 
 @dataclass(frozen=True)
@@ -129,7 +170,7 @@ def add_product(
         elif np.ndim(val) or np.ndim(xv):
             arr, s = (val, xv) if np.ndim(val) else (xv, val)
             if target.flags.c_contiguous and arr.flags.c_contiguous and row.count > 1:
-                blas.daxpy(arr, target, a=float(s))  # in place, one pass
+                axpy(float(s), arr, target)  # in place, one pass
             else:
                 target += np.multiply(arr, s)
         else:
@@ -139,8 +180,58 @@ def add_product(
 def dot(vals: np.ndarray | float, x: np.ndarray | float) -> float:
     """Σ_i vals_i x_i, with scalars standing for constant arrays."""
     if np.ndim(vals) and np.ndim(x):
-        return float(np.dot(vals, x))
-    return float(np.sum(np.multiply(vals, x)))
+        n = np.shape(vals)[0]
+        return math.fsum(  # type: ignore[index]
+            float(np.dot(vals[lo : lo + BLAS_BLOCK], x[lo : lo + BLAS_BLOCK]))
+            for lo in range(0, n, BLAS_BLOCK)
+        )
+    if np.ndim(vals) or np.ndim(x):
+        arr, s = (vals, x) if np.ndim(vals) else (x, vals)
+        return float(np.sum(arr)) * float(s)  # type: ignore[arg-type]
+    return float(vals) * float(x)  # type: ignore[arg-type]
+
+
+def dot3(
+    vals: np.ndarray | float, a: np.ndarray | float, b: np.ndarray | float, tmp: np.ndarray
+) -> float:
+    """Σ_i vals_i a_i b_i, scalars standing for constant arrays; ``tmp``: scratch, as long."""
+    arrays = [x for x in (vals, a, b) if np.ndim(x)]
+    scale = math.prod(float(x) for x in (vals, a, b) if not np.ndim(x))  # type: ignore[arg-type]
+    if len(arrays) < 3:
+        if not arrays:
+            return scale
+        return scale * dot(*arrays) if len(arrays) == 2 else scale * float(np.sum(arrays[0]))
+    n = np.shape(vals)[0]
+    total = 0.0
+    for lo in range(0, n, BLAS_BLOCK):
+        t_ = tmp[: min(BLAS_BLOCK, n - lo)]
+        np.multiply(vals[lo : lo + BLAS_BLOCK], a[lo : lo + BLAS_BLOCK], out=t_)  # type: ignore[index]
+        total += float(np.dot(t_, b[lo : lo + BLAS_BLOCK]))  # type: ignore[index]
+    return total
+
+
+def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
+    """y += a x in place (1-D, contiguous), one pass, in blocks (see :data:`BLAS_BLOCK`).
+
+    Long vectors go in spans over the threads, with ufuncs (SciPy's daxpy keeps the GIL).
+    """
+    n = y.shape[0]
+    if n >= PARALLEL_FROM and THREADS > 1:
+
+        def span(lo: int, hi: int) -> None:
+            t_ = _span_scratch()[: hi - lo]
+            np.multiply(x[lo:hi], a, out=t_)
+            np.add(y[lo:hi], t_, out=y[lo:hi])
+
+        in_spans(n, SPAN, span)
+        return
+    for lo in range(0, n, BLAS_BLOCK):
+        blas.daxpy(x[lo : lo + BLAS_BLOCK], y[lo : lo + BLAS_BLOCK], a=a)
+
+
+def scale(x: np.ndarray, a: float, out: np.ndarray) -> None:
+    """out = a x (1-D), in spans over the threads for long vectors."""
+    in_spans(out.shape[0], SPAN, lambda lo, hi: np.multiply(x[lo:hi], a, out=out[lo:hi]))
 
 
 class StreamKernel:
@@ -155,11 +246,18 @@ class StreamKernel:
     params : sequence of Symbol
     values : sequence of float
         Parameter values.
+    count : int
+        Number of instances.
+    summed : sequence of bool, optional
+        Per output: return its total over the instances (a float) instead of an array. A summed
+        output is reduced chunk by chunk while in cache and never stored: a force on an ordinary
+        coordinate, an energy.
 
     Attributes
     ----------
     const : list of float or None
-        Per output: its value when it does not depend on the state, else None.
+        Per output: its value when it does not depend on the state, else None (summed outputs:
+        the constant times ``count``).
     """
 
     def __init__(
@@ -169,6 +267,7 @@ class StreamKernel:
         params: Sequence[sp.Symbol],
         values: Sequence[float],
         count: int,
+        summed: Sequence[bool] | None = None,
     ) -> None:
         self.columns, self.count = columns, count
         k = len(columns)
@@ -185,46 +284,85 @@ class StreamKernel:
                 self.const.append(float(e.xreplace(subs)))
         args = [local_q(a) for a in range(k)] + [local_qd(a) for a in range(k)] + [t]
         self.varying = [i for i, c in enumerate(self.const) if c is None]
+        flags = [False] * len(exprs) if summed is None else list(summed)
+        self.const = [
+            c * count if c is not None and f else c for c, f in zip(self.const, flags, strict=True)
+        ]
+        # per varying output: its row in the stored outputs, or -1 - its row in the partial sums
+        self._slot, ns, nv = [], 0, 0
+        for i in self.varying:
+            self._slot.append(-1 - ns if flags[i] else nv)
+            ns, nv = ns + flags[i], nv + (not flags[i])
+        self._n_stored, self._n_summed = nv, ns
+        self.angles: list[sp.Expr] = []  # arguments of sin and cos, each reduced once (trig.py)
+        if count >= SINCOS_FROM:
+            self.angles = sorted(
+                {f.args[0] for e in varying for f in e.atoms(sp.sin, sp.cos)},
+                key=sp.default_sort_key,
+            )
+        if self.angles:
+            sc = [(sp.Dummy(f"s{i}"), sp.Dummy(f"c{i}")) for i in range(len(self.angles))]
+            rep = {sp.sin(a): s_ for a, (s_, _) in zip(self.angles, sc, strict=True)}
+            rep |= {sp.cos(a): c_ for a, (_, c_) in zip(self.angles, sc, strict=True)}
+            varying = [e.xreplace(rep) for e in varying]
+            self._angle_fn = sp.lambdify(args, self.angles, modules="numpy", docstring_limit=0)
+            args = args + [x for pair in sc for x in pair]
         self._fn = (
             sp.lambdify(args, varying, modules="numpy", cse=True, docstring_limit=0)
             if varying
             else None
         )
         self._out: np.ndarray | None = None
+        self.chunk = CHUNK  # instances per call of the generated function
+        self._partial = np.zeros((ns, -(-count // CHUNK)))
+        self._local = threading.local()
 
     def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
-        out = self._out
-        for lo in range(start, stop, CHUNK):
-            hi = min(lo + CHUNK, stop)
+        out, partial = self._out, self._partial
+        step = self.chunk
+        for lo in range(start, stop, step):
+            hi = min(lo + step, stop)
             args = [take(c, q, lo, hi) for c in self.columns]
             args += [take(c, qd, lo, hi) for c in self.columns]
-            for j, r in enumerate(self._fn(*args, t_)):
-                out[j, lo:hi] = r
+            trig = self._trig(args, t_, hi - lo) if self.angles else []
+            for j, r in zip(self._slot, self._fn(*args, t_, *trig), strict=True):
+                if j >= 0:
+                    out[j, lo:hi] = r  # type: ignore[index]
+                else:
+                    partial[-1 - j, lo // step] = np.sum(r) if np.ndim(r) else r * (hi - lo)
+
+    def _trig(self, args: list, t_: float, size: int) -> list:
+        """sin and cos of every angle over one chunk, sharing the argument reduction."""
+        buf = getattr(self._local, "buf", None)
+        if buf is None:
+            buf = self._local.buf = (np.empty((2 * len(self.angles), self.chunk)), workspace())
+        res = []
+        for i, a in enumerate(self._angle_fn(*args, t_)):
+            if np.ndim(a) == 0:
+                res += [math.sin(a), math.cos(a)]
+            else:
+                res += sincos(a, buf[0][2 * i, :size], buf[0][2 * i + 1, :size], buf[1])
+        return res
 
     def warm(self) -> None:
         """Allocate and touch the output buffers now (page faults at build time, not in a solve)."""
         if self._fn is not None and self._out is None:
-            self._out = np.zeros((len(self.varying), self.count))
+            self._out = np.zeros((self._n_stored, self.count))
             self._out.fill(0.0)
 
     def __call__(self, t_: float, q: np.ndarray, qd: np.ndarray) -> list:
-        """Every output over the instances: a float (constant) or an array, shape (count,).
+        """Every output over the instances: a float (a constant per instance, or the total of a
+        summed output) or an array, shape (count,).
 
         The arrays are buffers owned by the kernel, overwritten by the next call.
         """
         if self._fn is None:
             return list(self.const)
         if self._out is None:
-            self._out = np.empty((len(self.varying), self.count))
+            self._out = np.empty((self._n_stored, self.count))
         out = self._out
-        if self.count >= PARALLEL_FROM and THREADS > 1:
-            bounds = np.linspace(0, self.count, THREADS + 1).astype(int) // CHUNK * CHUNK
-            bounds[-1] = self.count
-            spans = list(pairwise(int(b) for b in bounds))
-            list(_pool().map(lambda s: self._run(t_, q, qd, *s), spans))
-        else:
-            self._run(t_, q, qd, 0, self.count)
-        res = list(self.const)
-        for j, i in enumerate(self.varying):
-            res[i] = out[j]
+        in_spans(self.count, self.chunk, lambda lo, hi: self._run(t_, q, qd, lo, hi))
+        res: list = list(self.const)
+        for j, i in zip(self._slot, self.varying, strict=True):
+            res[i] = out[j] if j >= 0 else math.fsum(self._partial[-1 - j])
         return res

@@ -5,6 +5,10 @@ Same contract as :class:`pfaff.NumericModel` (``accelerations``, ``constraint_re
 assembled for a solve: each template contributes *streams* of entries (a value per instance at
 global row ``start + step*i`` and column ``start' + step'*i``), applied with slice arithmetic.
 
+Kernels (:class:`pfaff.streams.StreamKernel`) evaluate each template over chunks of instances on
+two threads, take sin and cos of an angle together (:mod:`pfaff.trig`), and reduce outputs that
+only count summed (a force on an ordinary coordinate, energies) without storing them.
+
 Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.solvers`):
 
 ``triangular``
@@ -22,17 +26,19 @@ Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.solvers
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sps
 
 from .codegen import constraint_layout, energy_exprs
-from .errors import ModelError
+from .errors import ModelError, StateError
 from .family import LazySeq
 from .numeric import check_state
 from .solvers import SparseSolver, TriangularSolver, triangular_plan
 from .streams import Index, StreamKernel, add_product, indices, scatter_add, take
+from .symbols import local_qd
 
 
 class DynStreams:
@@ -45,15 +51,19 @@ class DynStreams:
         fidx = sorted(forcing)
         exprs = [loc.mass[ab] for ab in upper] + [forcing[a] for a in fidx]
         cols = block_columns(block)
-        self.kernel = StreamKernel(cols, exprs, params, values, block.n_inst)
+        self.forcing = [cols[a] for a in fidx]
+        # a force on a fixed coordinate (x of the ring) only ever counts summed over the instances
+        self.summed = [isinstance(ix, Index) and ix.fixed for ix in self.forcing]
+        summed = [False] * len(upper) + self.summed
+        self.kernel = StreamKernel(cols, exprs, params, values, block.n_inst, summed)
         # (row, col) of each stored entry and whether it also stands for (col, row)
         self.upper = [(cols[a], cols[b], a != b) for a, b in upper]
         self.mass = [(cols[a], cols[b]) for a, b in upper] + [
             (cols[b], cols[a]) for a, b in upper if a != b
         ]
-        self.forcing = [cols[a] for a in fidx]
         self._energy = (cols, block, params, values)
         self._ekernel: StreamKernel | None = None
+        self._pkernel: StreamKernel | None = None
 
     def mass_values(self, outs: list) -> list:
         """Values of :attr:`mass` entries from the kernel outputs (mirrored entries repeated)."""
@@ -64,10 +74,24 @@ class DynStreams:
         """(T, V) summed over the instances."""
         if self._ekernel is None:
             cols, block, params, values = self._energy
-            self._ekernel = StreamKernel(cols, energy_exprs(block), params, values, block.n_inst)
-        n = self._ekernel.count
-        T, V = (float(np.sum(x)) if np.ndim(x) else x * n for x in self._ekernel(t, q, qd))
-        return T, V
+            self._ekernel = _summed_kernel(cols, energy_exprs(block), params, values, block.n_inst)
+        return tuple(self._ekernel(t, q, qd))  # type: ignore[return-value]
+
+    def energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, ...]:
+        """(T, V, T₀, T₂) summed over the instances: T₀ = T at q̇ = 0, T₂ its quadratic part."""
+        if self._pkernel is None:
+            cols, block, params, values = self._energy
+            T, V = energy_exprs(block)
+            k = len(cols)
+            T0 = T.xreplace({local_qd(a): 0 for a in range(k)})
+            Tneg = T.xreplace({local_qd(a): -local_qd(a) for a in range(k)})
+            parts = [T, V, T0, (T + Tneg) / 2 - T0]
+            self._pkernel = _summed_kernel(cols, parts, params, values, block.n_inst)
+        return tuple(self._pkernel(t, q, qd))
+
+
+def _summed_kernel(cols: list, exprs: list, params, values, count: int) -> StreamKernel:
+    return StreamKernel(cols, exprs, params, values, count, [True] * len(exprs))
 
 
 class ConStreams:
@@ -119,8 +143,12 @@ class StructuredModel:
         params = tuple(eom.parameters)
         self.n, self.m = eom.n, eom.m
         coords = eom.coordinates
-        self.coordinate_names = LazySeq(self.n, _namer(eom, coords))
-        self.multiplier_names = LazySeq(self.m, lambda i: f"lambda{i + 1}")
+        self.coordinate_names = LazySeq(self.n, *_namer(eom, coords))
+        self.multiplier_names = LazySeq(
+            self.m,
+            lambda i: f"lambda{i + 1}",
+            lambda lo, hi: [f"lambda{i}" for i in range(lo + 1, hi + 1)],
+        )
         self.constraint_names = eom.constraint_names
         self.holonomic = np.asarray(eom.holonomic, dtype=bool).reshape(self.m)
         self.parameters = {p.name: v for p, v in zip(params, values, strict=True)}
@@ -133,6 +161,7 @@ class StructuredModel:
         self.p = eom.n - sum(len(f) for f in getattr(eom.system, "families", []))
         self.stats: dict = {"kkt_solves": 0}
         self._tmp: np.ndarray | None = None
+        self._zero: np.ndarray | None = None
         self.solver = "none"
         if solver != "none":
             plan = triangular_plan(self) if solver in (None, "triangular") else None
@@ -158,8 +187,11 @@ class StructuredModel:
             outs = part.kernel(t, q, qd)
             nm = len(part.upper)
             mvals.append(outs[:nm])
-            for ix, v in zip(part.forcing, outs[nm:], strict=True):
-                scatter_add(f, ix, v)
+            for ix, v, total in zip(part.forcing, outs[nm:], part.summed, strict=True):
+                if total:
+                    f[ix.start] += v
+                else:
+                    scatter_add(f, ix, v)
         return mvals, f
 
     def _accel_constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, list]:
@@ -171,14 +203,21 @@ class StructuredModel:
             bias.append(outs[-1])
         return avals, bias
 
-    def matvec(self, mvals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """M v from evaluated (upper-triangle) mass entries."""
+    def matvec(
+        self, mvals: list, v: np.ndarray, out: np.ndarray | None = None, add: bool = False
+    ) -> np.ndarray:
+        """M v from evaluated (upper-triangle) mass entries; ``add``: out += M v.
+
+        Entries given as the number 0 are skipped (see ``varying_mass``).
+        """
         y = np.zeros(self.n) if out is None else out
-        if out is not None:
+        if out is not None and not add:
             y.fill(0.0)
         tmp = self._scratch()
         for part, vals in zip(self._dyn, mvals, strict=True):
             for (r, c, sym), val in zip(part.upper, vals, strict=True):
+                if np.ndim(val) == 0 and val == 0:
+                    continue
                 add_product(y, r, val, take(c, v), tmp)
                 if sym:
                     add_product(y, c, val, take(r, v), tmp)
@@ -227,13 +266,15 @@ class StructuredModel:
 
     def _residuals(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         f, g = np.zeros(self.m), np.zeros(self.m)
+        tmp = self._scratch()
         for part in self._con:
             outs = part.res(t, q, qd)
             na = len(part.cols)
             for c, val in zip(part.cols, outs[:na], strict=True):
-                scatter_add(g, part.rows, np.multiply(val, take(c, qd)))
-            scatter_add(g, part.rows, outs[na])
-            scatter_add(f, part.rows, outs[na + 2])
+                add_product(g, part.rows, val, take(c, qd), tmp)
+            for out, val in ((g, outs[na]), (f, outs[na + 2])):
+                if np.ndim(val) or val != 0.0:
+                    scatter_add(out, part.rows, val)
         return f, g
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
@@ -274,7 +315,14 @@ class StructuredModel:
 
     # ------------------------------------------------------------------ solves
     def _solve_accelerations(
-        self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
+        self,
+        t: float,
+        q: np.ndarray,
+        qd: np.ndarray,
+        alpha: float = 0.0,
+        beta: float = 0.0,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
     ) -> tuple[np.ndarray, np.ndarray]:
         """q̈, λ with the constraint rows' right-hand side -(Ȧq̇ + ḃ) - 2αg - β²f (Baumgarte)."""
         mvals, f = self._dynamics(t, q, qd)
@@ -285,7 +333,55 @@ class StructuredModel:
             fr, g = self._residuals(t, q, qd)
             c = (np.zeros(self.m) if c is None else c) - 2 * alpha * g - beta**2 * fr
         self.stats["kkt_solves"] += 1
-        return self._solver.solve(mvals, f, avals, c)
+        return self._solver.solve(mvals, f, avals, c, out=out, multipliers=multipliers)
+
+    def _ode_function(self, alpha: float = 0.0, beta: float = 0.0):
+        """y' = [q̇, q̈] of y = [q, q̇] for the integrators: q̈ written in place, no λ."""
+        n = self.n
+
+        def fun(t: float, y: np.ndarray) -> np.ndarray:
+            out = np.empty(2 * n)
+            out[:n] = y[n:]
+            self._solve_accelerations(t, y[:n], y[n:], alpha, beta, out[n:], multipliers=False)
+            if not math.isfinite(float(np.sum(out[n:]))):  # q̈ was just written: still in cache
+                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+            return out
+
+        return fun
+
+    def evaluate_states(
+        self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """What a trajectory reports at k states: q̈, λ, f, g, T, V, T(q, 0, t) and T₂.
+
+        Parameters
+        ----------
+        t : ndarray, shape (k,)
+        q, qd : ndarray, shape (k, n)
+
+        Returns
+        -------
+        dict
+            ``qdd`` (k, n), ``multipliers`` (k, m), ``f`` and ``g`` (k, m), and (k,) arrays ``T``,
+            ``V``, ``T0`` = T(q, 0, t) and ``T2`` (the part of T quadratic in q̇). One kernel pass
+            per state for the energies (T, V, T₀ and T₂ together). ``f`` and ``g`` are views of
+            ``residual`` (k, 2, m), the layout of ``Trajectory.constraint_residual``, so that a
+            caller can keep it without a copy.
+        """
+        t = np.asarray(t, dtype=float)
+        k = len(t)
+        out = {"qdd": np.empty((k, self.n)), "multipliers": np.empty((k, self.m))}
+        out["residual"] = np.empty((k, 2, self.m))  # f and g below are views of it
+        out["f"], out["g"] = out["residual"][:, 0], out["residual"][:, 1]
+        out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
+        for i in range(k):
+            ti, qi, qdi = self._state(t[i], q[i], qd[i])
+            _, out["multipliers"][i] = self._solve_accelerations(ti, qi, qdi, out=out["qdd"][i])
+            out["f"][i], out["g"][i] = self._residuals(ti, qi, qdi)
+            for part in self._dyn:
+                for key, v in zip(("T", "V", "T0", "T2"), part.energies(ti, qi, qdi), strict=True):
+                    out[key][i] += v
+        return out
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
@@ -308,28 +404,43 @@ class StructuredModel:
         """Project (q, q̇) onto f(q,t) = 0 and A q̇ + b = 0 with mass-weighted minimum-norm steps.
 
         Newton on the positions, Δq = -M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹f (the KKT solve with zero forcing), then
-        one such step on the velocities. Returns the new q, q̇ and the number of Newton steps.
+        one such step on the velocities when |A q̇ + b| > tol (exact: the residual is linear in
+        q̇). Returns the new q, q̇ and the number of corrections: Newton steps, or 1 when only
+        the velocities moved; 0 means the state was returned unchanged.
         """
         t, q, qd = self._state(t, q, qd)
-        q, it = q.copy(), 0
-        for it in range(1, max_iter + 1):
-            f, _ = self._residuals(t, q, qd)
+        f, g = self._residuals(t, q, qd)  # f is 0 on the rows of velocity constraints
+        it = 0
+        while it < max_iter:
             if np.max(np.abs(f), initial=0.0) <= tol:
-                it -= 1
                 break
-            q += self._step(t, q, qd, -f)
-        _, g = self._residuals(t, q, qd)
-        qd = qd + self._step(t, q, qd, -g)
+            q = q - self._step(t, q, qd, f)
+            it += 1
+            f, g = self._residuals(t, q, qd)
+        if np.max(np.abs(g), initial=0.0) > tol:
+            qd = qd - self._step(t, q, qd, g)
+            it = max(it, 1)
         return q, qd, it
 
+    def _residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(f, A q̇ + b) without validating the state (for the projection and the integrators)."""
+        return self._residuals(t, q, qd)
+
     def _step(self, t: float, q: np.ndarray, qd: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """Δ = M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹c: the mass-weighted least change with A Δ = c."""
         mvals, _ = self._dynamics(t, q, qd)
         avals, _ = self._accel_constraints(t, q, qd)
-        return self._solver.solve(mvals, np.zeros(self.n), avals, c)[0]
+        return self._solver.solve(mvals, self._zeros(), avals, c, multipliers=False)[0]
+
+    def _zeros(self) -> np.ndarray:
+        if self._zero is None:
+            self._zero = np.zeros(self.n)
+        return self._zero
 
 
 def _namer(eom, coords):
-    """Coordinate name by index, as plain strings (no SymPy object per family member)."""
+    """Coordinate name by index and names lo … hi-1 at once, as plain strings (no SymPy object
+    per family member)."""
     fams = list(getattr(eom.system, "families", []))
     p = eom.n - sum(f.n for f in fams)
 
@@ -341,7 +452,16 @@ def _namer(eom, coords):
                 return f"{f.name}{f.first + i - f.offset}"
         return str(coords[i].func)
 
-    return name
+    def bulk(lo: int, hi: int) -> list[str]:
+        out = [name(i) for i in range(lo, min(hi, p))]
+        for f in fams:
+            a, b = max(lo, f.offset), min(hi, f.offset + f.n)
+            if a < b:
+                d = f.first - f.offset
+                out += [f"{f.name}{j}" for j in range(a + d, b + d)]
+        return out
+
+    return name, bulk
 
 
 def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:

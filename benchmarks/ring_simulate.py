@@ -1,0 +1,125 @@
+"""Benchmark: simulate the pushed rolling ring for 1 s of motion at N = 4096, 65536 and 2^20.
+
+For every N a fresh subprocess (so that peak RSS is per N) builds ``pfaff.models.rolling_ring(N,
+force=F)`` (the family form above N = 1024), starts it at rest with θ_1 = π and runs
+``pfaff.simulate(model, q0, q̇0, (0, t_end))`` with the default method "projection" (DOP853, the
+state projected onto the constraints after every step). The push is constant, so the motion is
+uniformly accelerated and DOP853 alone would cross 1 s in four steps: ``max_step`` (default
+t_end/50) makes it a real run of many steps. The reported states are ``--points`` times
+(default 11): a trajectory keeps q, q̇, q̈, λ and two residual arrays per point, 48 N bytes each, so
+401 points at N = 2^20 would need 20 GB for the result alone.
+
+Columns: N; simulated seconds; wall and CPU seconds of ``simulate`` (CPU counts every thread);
+accepted steps; right-hand-side evaluations; max constraint residual (max |f|, |A q̇ + b| over the
+reported states); max |x(t) - x0 - F t²/(4M)| (the closed form: ẍ = F/(2M)); friction error
+max |λ_1 + F/2|; peak RSS. Run from the project root::
+
+    python benchmarks/ring_simulate.py                    # N = 4096, 65536, 2^20, 1 s
+    python benchmarks/ring_simulate.py --quick            # N = 4096, 65536, 0.2 s
+    python benchmarks/ring_simulate.py --sizes 1048576 --t-end 1 --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+
+SIZES = [4096, 65536, 2**20]
+M_, R_, F_ = 1.0, 0.5, 2.0
+
+
+def one(n: int, t_end: float, max_step: float, points: int) -> dict:
+    """Simulate one N (run in a subprocess)."""
+    import numpy as np
+
+    import pfaff
+
+    t0 = time.perf_counter()
+    model = pfaff.models.rolling_ring(n, force=F_).equations().compile({"M": M_, "r": R_})
+    build = time.perf_counter() - t0
+    q0, qd0 = pfaff.models.ring_state(n, R_, theta=np.pi)
+    t_eval = np.linspace(0.0, t_end, points)
+    wall, cpu = time.perf_counter(), time.process_time()
+    traj = pfaff.simulate(model, q0, qd0, (0.0, t_end), t_eval=t_eval, max_step=max_step)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    x_exact = q0[0] + F_ * traj.t**2 / (4 * M_)
+    return {
+        "N": n,
+        "t_end": float(traj.t[-1]),
+        "status": traj.status,
+        "build_s": build,
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "integrator_cpu_s": traj.stats.get("cpu_time"),
+        "steps": int(traj.stats["steps"]),
+        "nfev": int(traj.stats["nfev"]),
+        "projections": int(traj.stats.get("projections", 0)),
+        "points": len(traj.t),
+        "residual": float(np.abs(traj.constraint_residual).max()),
+        "x_error": float(np.abs(traj.q[:, 0] - x_exact).max()),
+        "friction_error": float(np.abs(traj.multipliers[:, 0] + F_ / 2).max()),
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
+def table(rows: list[dict]) -> str:
+    """The printed table."""
+    head = (
+        f"{'N':>9} {'t_end':>5} {'wall s':>7} {'CPU s':>7} {'steps':>5} {'nfev':>5} "
+        f"{'residual':>9} {'max x err':>9} {'λ1 err':>8} {'rss MiB':>7}  status"
+    )
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r['N']:>9} {r['t_end']:5.2f} {r['wall_s']:7.1f} {r['cpu_s']:7.1f} "
+            f"{r['steps']:>5} {r['nfev']:>5} {r['residual']:9.1e} {r['x_error']:9.1e} "
+            f"{r['friction_error']:8.1e} {r['peak_rss_mb']:7.0f}  {r['status']}"
+        )
+    return "\n".join(lines)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=None)
+    ap.add_argument("--t-end", type=float, default=None, help="simulated seconds (default 1)")
+    ap.add_argument("--max-step", type=float, default=None, help="default t_end/50")
+    ap.add_argument("--points", type=int, default=11, help="reported states (default 11)")
+    ap.add_argument("--quick", action="store_true", help="N = 4096, 65536 for 0.2 s")
+    ap.add_argument("--json", metavar="FILE")
+    ap.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    sizes = args.sizes or ([4096, 65536] if args.quick else SIZES)
+    t_end = args.t_end if args.t_end is not None else (0.2 if args.quick else 1.0)
+    max_step = args.max_step if args.max_step is not None else t_end / 50
+    if args.one:
+        print(json.dumps(one(args.one, t_end, max_step, args.points)))
+        return 0
+    rows = []
+    for n in sizes:
+        cmd = [sys.executable, os.path.abspath(__file__), "--one", str(n), "--t-end", str(t_end)]
+        cmd += ["--max-step", str(max_step), "--points", str(args.points)]
+        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        if done.returncode:
+            print(f"N = {n}: failed\n{done.stderr[-2000:]}", file=sys.stderr)
+            continue
+        rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
+        print(table(rows).splitlines()[-1], flush=True)
+    print()
+    print(
+        f"Rolling ring pushed by F = {F_} (M = {M_}, r = {R_}) from rest, method 'projection', "
+        f"max_step {max_step:g}, {args.points} reported states; {os.cpu_count()} CPUs"
+    )
+    print(table(rows))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
