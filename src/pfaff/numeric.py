@@ -73,7 +73,9 @@ def check_state(
             if names is not None:
                 which = f" for coordinates {', '.join(names[:6])}{'...' if n > 6 else ''};"
             raise StateError(f"`{name}` must have shape ({n},){which} got shape {arr.shape}")
-        if not np.isfinite(arr).all():
+        # one pass and no temporary: a finite sum means finite entries (NaN and ±inf propagate);
+        # only a sum that overflowed needs the elementwise test
+        if not (math.isfinite(float(np.sum(arr))) or np.isfinite(arr).all()):
             raise StateError(f"`{name}` contains NaN or infinity")
     if not np.isfinite(tt):
         raise StateError("`t` is not finite")

@@ -293,16 +293,26 @@ def _evaluate(model: Any, T: np.ndarray, Q: np.ndarray, QD: np.ndarray) -> dict:
     return out
 
 
+def _stacked(rows: list, n: int) -> np.ndarray:
+    """The recorded states as one (k, n) array; the list is emptied (no second copy alive)."""
+    out = np.stack(rows) if rows else np.zeros((0, n))
+    rows.clear()
+    return out
+
+
 def _trajectory(model, method, run, status, message, stats, projector, project_output):
     n, m = model.n, model.m
     T = np.array(run.T)
-    Q = np.array(run.Q).reshape(len(T), n)
-    QD = np.array(run.QD).reshape(len(T), n)
+    Q, QD = _stacked(run.Q, n), _stacked(run.QD, n)
     ev = _evaluate(model, T, Q, QD) if len(T) else None
     if ev is None:
         z, zm = np.zeros((0, n)), np.zeros((0, m))
         ev = {"qdd": z, "multipliers": zm, "f": zm, "g": zm, "T": T, "V": T, "T0": T, "T2": T}
-    f = np.where(np.asarray(model.holonomic, dtype=bool), ev["f"], 0.0)
+    res = ev.get("residual")  # a model may give f and g as views of one (k, 2, m) array
+    if res is None:
+        res = np.empty((len(T), 2, m))  # filled in place: no np.where / np.stack copies
+        res[:, 0], res[:, 1] = ev.pop("f"), ev.pop("g")
+    res[:, 0, ~np.asarray(model.holonomic, dtype=bool)] = 0.0
     return Trajectory(
         t=T,
         q=Q,
@@ -312,7 +322,7 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         kinetic=ev["T"],
         potential=ev["V"],
         jacobi=ev["T2"] - ev["T0"] + ev["V"],
-        constraint_residual=np.stack([f, ev["g"]], axis=1),
+        constraint_residual=res,
         stats=stats,
         status=status,
         message=message,
