@@ -8,7 +8,7 @@ import sympy as sp
 
 import pfaff
 from conftest import F, M, on_ring_manifold, r
-from pfaff.numeric import multipliers_by_back_substitution
+from pfaff.backsub import multipliers_by_back_substitution
 from pfaff.reduce import tidy
 
 t = pfaff.t

@@ -13,7 +13,7 @@ import sympy as sp
 from sympy.physics.vector.printing import vsprint
 
 from . import models
-from .numeric import multipliers_by_back_substitution
+from .backsub import multipliers_by_back_substitution
 
 MAX_LISTED = 1000  # multipliers listed in the report (all of them up to this N)
 EXPLICIT_REDUCE_MAX = 64  # explicit reduction up to this N; the one-coordinate model beyond
