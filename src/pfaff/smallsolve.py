@@ -165,6 +165,16 @@ def schur_source(
     The inputs are variable names: M's entries ``Ms`` (pattern ``mass``), A's ``As`` (pattern
     ``acon``), the forcing ``Fs`` and the constraint right-hand side ``cs``; intermediate variables
     are ``{prefix}1, {prefix}2, …``. ``shift`` and ``tau`` as in :func:`schur_solver`.
+
+    Examples
+    --------
+    One coordinate of mass m0 and one constraint a0 q̈ = c0: q̈ = F0/m0 + (c0 − a0 F0/m0)/a0.
+
+    >>> lines, out = schur_source([(0, 0)], [(0, 0)], ["m0"], ["a0"], ["F0"], ["c0"])
+    >>> env = {**NAMESPACE, "m0": 2.0, "a0": 1.0, "F0": 4.0, "c0": 3.0}
+    >>> exec("\n".join(line.strip() for line in lines), env)
+    >>> eval(out[0], env)
+    3.0
     """
     n, m = len(Fs), len(cs)
     w = _Writer(prefix)
