@@ -172,7 +172,7 @@ def schur_source(
 
     >>> lines, out = schur_source([(0, 0)], [(0, 0)], ["m0"], ["a0"], ["F0"], ["c0"])
     >>> env = {**NAMESPACE, "m0": 2.0, "a0": 1.0, "F0": 4.0, "c0": 3.0}
-    >>> exec("\n".join(line.strip() for line in lines), env)
+    >>> exec(chr(10).join(line.strip() for line in lines), env)
     >>> eval(out[0], env)
     3.0
     """
