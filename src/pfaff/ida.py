@@ -26,8 +26,10 @@ from .errors import PfaffError
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 REGULARIZATION = 1e-8  # ε / (max diag A M⁻¹Aᵀ / cj) on the algebraic diagonal
-STALL_STEPS = 200  # consecutive steps shorter than STALL_FRACTION of the span: a stall
-STALL_FRACTION = 1e-10
+STALL_STEPS = 200  # consecutive steps of at most STALL_ULPS ulps of t: a stall
+STALL_ULPS = 4096.0
+STALL_FRACTION = 1e-6  # near t = 0, the ulps are those of this fraction of the span
+EPS = float(np.finfo(float).eps)
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
 
 
@@ -65,7 +67,7 @@ class IDAStepper:
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
         self.t_end = t_end
-        self._tiny_step = STALL_FRACTION * max(abs(t_end - t0), 1e-300)
+        self._span = abs(t_end - t0)
         self._tiny_count = 0
         res = self.solver.init_step(t0, y0, yp0)
         self._check(res)
@@ -102,7 +104,7 @@ class IDAStepper:
         The λ and μ columns and the y' part are exact (−Aᵀ, −A_hᵀ, cj·I, cj·M). The q and v
         columns come from forward differences of the residual ("fd") or from M and A alone
         ("approximate", no curvature terms). The diagonal blocks (g, λ) and (f, μ) get
-        ε = 1e-8 · max diag(A M⁻¹Aᵀ) / cj (and the same for A_h A_hᵀ): it leaves a
+        ε = 1e-8 · max diag(A D⁻¹Aᵀ) / cj, D = diag M (and the same for A_h A_hᵀ): it leaves a
         well-conditioned Newton matrix practically unchanged and keeps it invertible where a
         linkage folds flat, so that Newton still converges in every other direction (λ and μ
         are outside the error test, so the collapsing multiplier's slow convergence is harmless).
@@ -128,9 +130,10 @@ class IDAStepper:
         JJ[n : 2 * n, n : 2 * n] += cj * M
         JJ[:n, 2 * n + m :] = -Ah.T
         JJ[n : 2 * n, 2 * n : 2 * n + m] = -A.T
-        if m:
-            Z = np.linalg.solve(M, A.T) if n else A.T
-            eps = REGULARIZATION * float(np.max(np.einsum("ij,ji->i", A, Z))) / cj
+        if m:  # rows' sizes in the metric of diag M (a coordinate without inertia: unit weight)
+            d = np.diag(M).copy()
+            d[~(d > 0)] = 1.0
+            eps = REGULARIZATION * float(np.max((A * A / d).sum(axis=1))) / cj
             JJ[2 * n + np.arange(m), 2 * n + np.arange(m)] = eps
         if mh:
             eps = REGULARIZATION * float(np.max(np.einsum("ij,ij->i", Ah, Ah))) / cj
@@ -154,11 +157,13 @@ class IDAStepper:
         res = self.solver.step(self.t_end, method="onestep", tstop=self.t_end)
         self._check(res)
         self._last = res
-        self._tiny_count = self._tiny_count + 1 if self.t - t_before < self._tiny_step else 0
+        # a step that hardly moves t against its own size (a few thousand ulps) counts as stalled
+        tiny = STALL_ULPS * EPS * max(abs(self.t), STALL_FRACTION * self._span)
+        self._tiny_count = self._tiny_count + 1 if self.t - t_before < tiny else 0
         if self._tiny_count >= STALL_STEPS:
             raise PfaffError(
                 f"IDA stalled at t = {self.t:.17g}: {STALL_STEPS} steps in a row shorter than "
-                f"{self._tiny_step:.3g}. Its corrector cannot meet the tolerances here: they may "
+                f"{tiny:.3g}. Its corrector cannot meet the tolerances here: they may "
                 "be too tight for IDA (rtol below about 1e-10), or the constraint Jacobian loses "
                 "rank (a linkage folding flat, which method='projection' passes)"
             )

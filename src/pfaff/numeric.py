@@ -214,7 +214,7 @@ class NumericModel:
         N = n + m
         if self._fused is not None:
             fk = self._fused
-            v = np.array(fk.fn(t, *q.tolist(), *qd.tolist(), *self._p))
+            v = self._fused_values(t, q, qd)
             K = np.zeros((N, N))
             K.flat[fk.kkt_index] = v[fk.kkt_source]
             o = fk.offsets
@@ -265,7 +265,20 @@ class NumericModel:
             raise ConstraintError(self._singular_message(t)) from e
         if not math.isfinite(qdd.sum() + lam.sum()):
             raise ConstraintError(self._singular_message(t))
+        if floor == STATE_FLOOR and self.dense and self.m:
+            self._check_consistent(K[n:, :n], qdd, c, t)
         return qdd, lam
+
+    def _check_consistent(self, A: np.ndarray, qdd: np.ndarray, c: np.ndarray, t: float) -> None:
+        """A single state's q̈ must satisfy A q̈ = c: else the constraints are inconsistent here."""
+        r = np.abs(A @ qdd - c)
+        scale = 1.0 + np.abs(c).max() + np.abs(A).max() * np.abs(qdd).max()
+        if r.max() > 1e-8 * scale:
+            i = int(np.argmax(r))
+            raise ConstraintError(
+                f"{self._singular_message(t)} (inconsistent equations: no acceleration satisfies "
+                f"constraint `{self.constraint_names[i]}` together with the others)"
+            )
 
     def _solve_full(self, K: np.ndarray, rhs: np.ndarray, t: float) -> tuple:
         """q̈, λ from the whole dense augmented matrix (LAPACK gesv, then least squares)."""
@@ -371,7 +384,11 @@ class NumericModel:
 
         def list_fun(t: float, yl: list) -> list:
             out = rhs(t, yl)
-            if not isfinite(sum(out)):
+            try:
+                finite = isfinite(sum(out))
+            except TypeError:  # a complex number: a fractional power of a negative value
+                raise StateError(_not_real(t)) from None
+            if not finite:
                 raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
             return out
 
@@ -381,12 +398,22 @@ class NumericModel:
         fused_fun.on_lists = list_fun  # type: ignore[attr-defined]
         return fused_fun
 
+    def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The fused kernel's flat outputs at a state; non-real values are an error naming t."""
+        try:
+            v = np.array(self._fused.fn(t, *q.tolist(), *qd.tolist(), *self._p))
+        except ValueError as e:  # math domain error: sqrt or log of a negative value
+            raise StateError(f"the equations are not defined at t = {t:.17g} ({e})") from None
+        if v.dtype.kind == "c":
+            raise StateError(_not_real(t))
+        return v
+
     def _fused_accelerations(
         self, t: float, q: np.ndarray, qd: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         # the hot path of small systems: every NumPy call here costs about a microsecond
         fk, N = self._fused, self.n + self.m
-        v = np.array(fk.fn(t, *q.tolist(), *qd.tolist(), *self._p))
+        v = self._fused_values(t, q, qd)
         K = np.zeros((N, N))
         K.flat[fk.kkt_index] = v[fk.kkt_source]
         o = fk.offsets
@@ -489,6 +516,13 @@ class NumericModel:
             "redundant or inconsistent in this configuration, or M is singular on the admissible "
             "motions (a coordinate without inertia)"
         )
+
+
+def _not_real(t: float) -> str:
+    return (
+        f"the equations are not real at t = {t:.17g}: a fractional power of a negative value "
+        "(write it with sqrt, cbrt or Abs where the model allows)"
+    )
 
 
 def _indptr(col_of_entry: np.ndarray, N: int) -> np.ndarray:

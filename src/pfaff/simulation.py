@@ -64,8 +64,8 @@ def _options(method: str, kw: dict) -> dict:
         raise StateError(
             f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r}"
         )
-    if kw["rtol"] <= 0 or kw["atol"] <= 0:
-        raise StateError("`rtol` and `atol` must be positive")
+    if kw["rtol"] <= 0 or kw["atol"] <= 0 or kw["constraint_tol"] <= 0:
+        raise StateError("`rtol`, `atol` and `constraint_tol` must be positive")
     return kw
 
 
@@ -90,6 +90,8 @@ def initial_state(
     q, qd, _ = projector(t0, q, qd)
     if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
         raise StateError("the initial state could not be projected onto the constraints")
+    if hasattr(model, "_row_scales"):
+        model._solve_accelerations(t0, q, qd)  # raises if no q̈ satisfies the constraints here
     return q, qd
 
 
