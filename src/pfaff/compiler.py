@@ -140,7 +140,7 @@ def checked_fused(eom: EquationsOfMotion, model: NumericModel) -> FusedKernel | 
 
 def _rhs_agrees(fused: FusedKernel, model: NumericModel, t0: float, q, qd) -> bool:
     """The one-function right-hand side against kernel + Schur solve at the test state."""
-    p, taus, y = (*model._p, 0.0, 0.0), [0.0] * model.m, [*q.tolist(), *qd.tolist()]
+    p, taus, y = (*model._p, 0.0, 0.0), [0.0] * (model.m + 1), [*q.tolist(), *qd.tolist()]
     try:
         slow = fused.sfn(*fused.ofn(t0, *y, *p), *taus)
         fast = fused.rfn(*p, *taus, lambda t, y: None)(t0, y)

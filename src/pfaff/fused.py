@@ -46,10 +46,10 @@ class FusedKernel:
         for LAPACK (the ODE right-hand side of small systems).
     ofn, sfn : callable
         ``ofn`` (same arguments as ``kfn``) gives the flat [M entries, A entries, Q − h, c] and
-        ``sfn(*that, *taus)`` q̈ by straight-line Schur-complement code with the pivots of
+        ``sfn(*that, *taus, cap)`` q̈ by straight-line Schur-complement code with the pivots of
         A M⁻¹Aᵀ floored (:mod:`pfaff.smallsolve`, :mod:`pfaff.kkt`).
     rfn : callable or None
-        Both in one generated function: ``rfn(*params, alpha, beta, *taus, slow)`` returns
+        Both in one generated function: ``rfn(*params, alpha, beta, *taus, cap, slow)`` returns
         ``rhs(t, y: list) -> [q̇, q̈]`` (a list), which calls ``slow(t, y)`` where M is not
         positive definite. None if the printer could not write the expressions.
     qfn, cfn : callable
@@ -201,12 +201,12 @@ def _rhs_factory(
     taus = [f"_tau{i}" for i in range(m)]
     body = [f"{pr.doprint(x)} = {pr.doprint(e)}" for x, e in repl]
     body += [f"{v} = {pr.doprint(e)}" for v, e in zip(Ms + As + Fs + cs, red, strict=True)]
-    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, prefix="_v")
+    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
     body += [ln.strip() for ln in lines]
     ys = ", ".join(f"_y{i}" for i in range(2 * n))
     src = "\n".join(
         [
-            f"def make({', '.join([*map(str, P), '_alpha', '_beta', *taus])}, _slow):",
+            f"def make({', '.join([*map(str, P), '_alpha', '_beta', *taus, '_cap'])}, _slow):",
             "    def rhs(_t, _y):",
             f"        {ys}, = _y",
             "        try:",

@@ -22,6 +22,7 @@ from scipy.integrate import DOP853, RK23, RK45
 
 from .errors import PfaffError, StateError
 from .fastrk import FLOAT_LIMIT, FloatDOP853
+from .kkt import RESCALE_BELOW
 from .projection import Projector
 
 RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
@@ -37,7 +38,9 @@ def acceleration_field(
     """
     if hasattr(model, "_row_scales"):  # NumericModel
         scales = model._row_scales(*start) if start is not None else None
-        return model._ode_function(alpha, beta, scales)
+        fun = model._ode_function(alpha, beta, scales)
+        fun.rows = RowReference(model, fun, scales)
+        return fun
     if hasattr(model, "_ode_function"):  # a model with its own (e.g. structured O(N)) field
         return model._ode_function(alpha, beta)
     n, solve = model.n, model._solve_accelerations
@@ -46,6 +49,34 @@ def acceleration_field(
         return np.concatenate([y[n:], solve(t, y[:n], y[n:], alpha, beta)[0]])
 
     return fun
+
+
+class RowReference:
+    """Reference sizes of the constraint rows for the floor of :mod:`pfaff.kkt`, kept current.
+
+    A row that starts (nearly) collapsed — a linkage released from a flat configuration — has
+    no size of its own yet; while any row is below 1e-3 of the largest, the sizes at each
+    accepted step raise the references (a running maximum), and the right-hand side is rebuilt.
+    """
+
+    def __init__(self, model: Any, fun: Any, scales: np.ndarray | None) -> None:
+        self.model, self.fun, self.ref = model, fun, scales
+        self.active = scales is not None and hasattr(fun, "rescale") and self._small_rows()
+
+    def _small_rows(self) -> bool:
+        return bool((self.ref < RESCALE_BELOW * self.ref.max()).any())
+
+    def update(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        if not self.active:
+            return
+        now = self.model._row_scales(t, q, qd)
+        if now is None:
+            return
+        new = np.maximum(self.ref, now)
+        if (new > self.ref).any():
+            self.ref = new
+            self.fun.rescale(new)
+        self.active = self._small_rows()
 
 
 class _RKStepper:
@@ -99,6 +130,9 @@ class _RKStepper:
         self.stats["steps"] += 1
         self.stats["rejected"] += max(used // self._attempt_nfev - 1, 0)
         self._dense = self._y_raw = None
+        rows = getattr(self.fun, "rows", None)
+        if rows is not None and rows.active:
+            rows.update(self.t, *self.state())
 
     def dense(self, ts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         """States inside the last step (before any projection of its end point)."""

@@ -36,7 +36,8 @@ import numpy as np
 import scipy.linalg
 
 FLOOR = 1e-5  # τ_i / s_i in the integrators' right-hand side
-SCALE_FLOOR = 1e-3  # a row's reference size is at least this fraction of the largest
+ZERO_ROW = 1e-12  # a row's reference size is at least this fraction of the largest
+RESCALE_BELOW = 1e-3  # rows this much smaller than the largest get their reference refreshed
 STATE_FLOOR = 1e-15  # τ / max diag S for a single state
 _potrf = scipy.linalg.lapack.dpotrf
 _potrs = scipy.linalg.lapack.dpotrs
@@ -57,15 +58,15 @@ def floored_array(e: np.ndarray, tau: np.ndarray | float) -> np.ndarray:
 
 
 def row_scales(M: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """Reference sizes s_i = A_i M⁻¹ A_iᵀ of the constraint rows, at least 1e-3 of the largest.
+    """Sizes s_i = A_i M⁻¹ A_iᵀ of the constraint rows (at least 1e-12 of the largest).
 
     Examples
     --------
-    >>> row_scales(np.eye(2), np.array([[3.0, 4.0], [0.0, 1e-6]])).tolist()
-    [25.0, 0.025]
+    >>> row_scales(np.eye(2), np.array([[3.0, 4.0], [0.0, 1e-3]])).tolist()
+    [25.0, 1e-06]
     """
     d = np.einsum("ij,ji->i", A, np.linalg.solve(M, A.T)) if A.shape[0] else np.zeros(0)
-    return np.maximum(d, SCALE_FLOOR * d.max(initial=0.0))
+    return np.maximum(d, ZERO_ROW * d.max(initial=0.0))
 
 
 def solve_floored(
@@ -146,8 +147,9 @@ def _solve_one(M, A, F, c, floor, scales) -> tuple[np.ndarray, np.ndarray]:
 
 def _floored_lambda(S: np.ndarray, r: np.ndarray, floor: float, scales) -> np.ndarray:
     """λ = S⁻¹ r with the eigenvalues of S (row-scaled by ``scales``) floored."""
-    if scales is not None:
-        w = 1.0 / np.sqrt(scales)
+    if scales is not None:  # τ_i = floor · min(s_i, max diag S): rows shrinking together stay exact
+        top = np.max(np.diagonal(S, axis1=-2, axis2=-1), axis=-1)
+        w = 1.0 / np.sqrt(np.minimum(scales, np.maximum(top, 1e-300)))
         S = S * w[:, None] * w[None, :]
         r = r * w
         tau = np.full(S.shape[:-2], float(floor))

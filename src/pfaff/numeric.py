@@ -348,26 +348,55 @@ class NumericModel:
         Small systems get a closure around the fused kernel: a few microseconds per call; its
         attribute ``on_lists`` is the same function on lists of floats (:mod:`pfaff.fastrk`).
         A non-finite q̈ raises :class:`StateError` naming the time. ``scales``: reference row
-        sizes for the floor of :mod:`pfaff.kkt` (None: relative to the largest row).
+        sizes for the floor of :mod:`pfaff.kkt` (None: no floor); the function's ``rescale(new)``
+        replaces them during a run.
         """
         n = self.n
         fk = self._fused
+        ref = [None if scales is None else np.asarray(scales, dtype=float)]  # see ``rescale``
         if fk is None:
             solve = self._solve_accelerations
 
             def fun(t: float, y: np.ndarray) -> np.ndarray:
                 out = np.empty(2 * n)
                 out[:n] = y[n:]
-                out[n:] = solve(t, y[:n], y[n:], alpha, beta, FLOOR, scales)[0]
+                out[n:] = solve(t, y[:n], y[n:], alpha, beta, FLOOR, ref[0])[0]
                 if not math.isfinite(out.sum()):
                     raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
                 return out
 
+            fun.rescale = lambda new: ref.__setitem__(0, new)  # type: ignore[attr-defined]
             return fun
-        kfn, ofn, sfn, p, gesv = fk.kfn, fk.ofn, fk.sfn, (*self._p, alpha, beta), _gesv
+        rhs = [self._fused_rhs(alpha, beta, ref[0])]
         isfinite = math.isfinite
+
+        def list_fun(t: float, yl: list) -> list:
+            out = rhs[0](t, yl)
+            try:
+                finite = isfinite(sum(out))
+            except TypeError:  # a complex number: a fractional power of a negative value
+                raise StateError(_not_real(t)) from None
+            if not finite:
+                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+            return out
+
+        def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
+            return np.array(list_fun(t, y.tolist()))
+
+        def rescale(new: np.ndarray) -> None:
+            rhs[0] = self._fused_rhs(alpha, beta, new)
+
+        fused_fun.on_lists = list_fun  # type: ignore[attr-defined]
+        fused_fun.rescale = rescale  # type: ignore[attr-defined]
+        return fused_fun
+
+    def _fused_rhs(self, alpha: float, beta: float, scales: np.ndarray | None):
+        """``rhs(t, y: list) -> list`` of a fused model for given reference row sizes."""
+        fk, n = self._fused, self.n
+        kfn, ofn, sfn, p, gesv = fk.kfn, fk.ofn, fk.sfn, (*self._p, alpha, beta), _gesv
         # no reference sizes: no floor (a singular S then goes to LAPACK and least squares)
         taus = [0.0] * self.m if scales is None else (FLOOR * np.asarray(scales)).tolist()
+        taus.append(FLOOR if scales is not None else 0.0)  # the cap factor
 
         def slow(t: float, yl: list) -> list:
             try:
@@ -380,23 +409,7 @@ class NumericModel:
                 qdd = x[:n].tolist()
             return yl[n:] + qdd
 
-        rhs = fk.rfn(*p, *taus, slow) if fk.rfn is not None else slow
-
-        def list_fun(t: float, yl: list) -> list:
-            out = rhs(t, yl)
-            try:
-                finite = isfinite(sum(out))
-            except TypeError:  # a complex number: a fractional power of a negative value
-                raise StateError(_not_real(t)) from None
-            if not finite:
-                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-            return out
-
-        def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
-            return np.array(list_fun(t, y.tolist()))
-
-        fused_fun.on_lists = list_fun  # type: ignore[attr-defined]
-        return fused_fun
+        return fk.rfn(*p, *taus, slow) if fk.rfn is not None else slow
 
     def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The fused kernel's flat outputs at a state; non-real values are an error naming t."""

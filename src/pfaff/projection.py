@@ -154,8 +154,17 @@ class Projector:
             q -= _correction(A, _metric(M, A), f)  # Newton, with the Jacobian at the current q
             it, last = it + 1, err
             A, M, f, g = self._matrices(t, q, qd)
-        if np.max(np.abs(g) / thr) > 1.0:
-            qd -= _correction(A, _metric(M, A), g)  # exact up to the damping: g is linear in q̇
+        # g is linear in q̇: one correction is exact up to the damping, which can leave a row much
+        # smaller than the largest short of its test; a few more passes finish it
+        W, last = None, np.inf
+        for _ in range(self.max_iter):
+            err = np.max(np.abs(g) / thr)
+            if err <= 1.0 or err >= last:
+                break
+            W = _metric(M, A) if W is None else W
+            qd -= _correction(A, W, g)
+            last = err
+            g = residuals(self.model, t, q, qd)[1]
         self._count(max(it, 1))
         return q, qd, True
 
@@ -197,9 +206,15 @@ class Projector:
                 it, last = it + 1, ef
                 v = fk.qfn(t, *q, *qd, *p)
                 ef, eg = excess(v)
-            if eg > 1.0:
+            last = math.inf
+            for _ in range(self.max_iter):  # see the general path
+                if eg <= 1.0 or eg >= last:
+                    break
                 dv = fk.cfn(*v[:nMA], *zeros, *v[nMA + m :], shift)
                 qd = [a - b for a, b in zip(qd, dv, strict=True)]
+                last = eg
+                v = fk.qfn(t, *q, *qd, *p)
+                ef, eg = excess(v)
         except (ValueError, ZeroDivisionError):
             return None
         self._count(max(it, 1))

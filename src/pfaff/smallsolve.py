@@ -114,8 +114,8 @@ def schur_solver(
 
     With ``damped=True`` the function takes one more argument ``shift`` and solves with
     S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.projection`). With
-    ``floor=True`` it takes m more arguments ``tau0 … tau{m-1}`` and floors the j-th pivot of S
-    at tau_j (accelerations through rank loss, :mod:`pfaff.kkt`).
+    ``floor=True`` it takes m + 1 more arguments ``tau0 … tau{m-1}, cap`` and floors the j-th
+    pivot of S at min(tau_j, cap · max diag S) (accelerations through rank loss, :mod:`pfaff.kkt`).
 
     Parameters
     ----------
@@ -136,9 +136,10 @@ def schur_solver(
     Fs, cs = [f"F{i}" for i in range(n)], [f"c{i}" for i in range(m)]
     tau = [f"tau{i}" for i in range(m)] if floor else None
     lines, out = schur_source(
-        mass, acon, Ms, As, Fs, cs, shift="shift" if damped else None, tau=tau
+        mass, acon, Ms, As, Fs, cs, shift="shift" if damped else None, tau=tau, cap="cap"
     )
-    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []) + (tau or []))
+    extra = (["shift"] if damped else []) + ([*tau, "cap"] if tau is not None else [])
+    args = ", ".join(Ms + As + Fs + cs + extra)
     src = f"def solve({args}):\n" + "\n".join(lines) + f"\n    return [{', '.join(out)}]\n"
     namespace: dict = dict(NAMESPACE)
     exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
@@ -158,13 +159,14 @@ def schur_source(
     *,
     shift: str | None = None,
     tau: list[str] | None = None,
+    cap: str | None = None,
     prefix: str = "v",
 ) -> tuple[list[str], list[str]]:
     """Lines (indented for a function body) computing q̈, and the n expressions of q̈.
 
     The inputs are variable names: M's entries ``Ms`` (pattern ``mass``), A's ``As`` (pattern
     ``acon``), the forcing ``Fs`` and the constraint right-hand side ``cs``; intermediate variables
-    are ``{prefix}1, {prefix}2, …``. ``shift`` and ``tau`` as in :func:`schur_solver`.
+    are ``{prefix}1, {prefix}2, …``. ``shift``, ``tau`` and ``cap`` as in :func:`schur_solver`.
 
     Examples
     --------
@@ -199,6 +201,9 @@ def schur_source(
     for i in range(m):
         acc = _dot(list(zip(A[i], y, strict=True)))
         r.append(w.let(f"{cs[i]} - ({acc})" if acc else cs[i]))
+    if tau and cap and m:  # τ_j never above cap · max diag S: rows shrinking together stay exact
+        top = w.let(f"{cap} * max({', '.join(S[i][i] or '0.0' for i in range(m))}, 0.0)")
+        tau = [w.let(f"{tj} if {tj} < {top} else {top}") or tj for tj in tau]
     lam = w.solve(w.cholesky(S, tau), r) if m else []
     out = []
     for i in range(n):
