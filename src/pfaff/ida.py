@@ -50,6 +50,7 @@ class IDAStepper:
         self.n, self.m, self.mh = n, m, mh
         self.size = 2 * n + m + mh
         self.fd = self._finite_differences(opts)
+        self._ref, self._ref_h = np.zeros(m), np.zeros(mh)  # rows' largest sizes so far
         alg = list(range(2 * n, self.size))
         atol = np.full(self.size, float(opts["atol"]))
         atol[alg] = 1e12  # algebraic variables: out of the error test
@@ -104,7 +105,8 @@ class IDAStepper:
         The λ and μ columns and the y' part are exact (−Aᵀ, −A_hᵀ, cj·I, cj·M). The q and v
         columns come from forward differences of the residual ("fd") or from M and A alone
         ("approximate", no curvature terms). The diagonal blocks (g, λ) and (f, μ) get
-        ε = 1e-8 · max diag(A D⁻¹Aᵀ) / cj, D = diag M (and the same for A_h A_hᵀ): it leaves a
+        ε_i = 1e-8 · s_i / cj, s_i the largest A_i D⁻¹A_iᵀ seen so far, D = diag M (and the same
+        with A_h A_hᵀ): it leaves a
         well-conditioned Newton matrix practically unchanged and keeps it invertible where a
         linkage folds flat, so that Newton still converges in every other direction (λ and μ
         are outside the error test, so the collapsing multiplier's slow convergence is harmless).
@@ -130,14 +132,15 @@ class IDAStepper:
         JJ[n : 2 * n, n : 2 * n] += cj * M
         JJ[:n, 2 * n + m :] = -Ah.T
         JJ[n : 2 * n, 2 * n : 2 * n + m] = -A.T
-        if m:  # rows' sizes in the metric of diag M (a coordinate without inertia: unit weight)
+        if m:  # per row, relative to the row's largest size so far (a small row stays exact)
             d = np.diag(M).copy()
-            d[~(d > 0)] = 1.0
-            eps = REGULARIZATION * float(np.max((A * A / d).sum(axis=1))) / cj
-            JJ[2 * n + np.arange(m), 2 * n + np.arange(m)] = eps
+            d[~(d > 0)] = 1.0  # a coordinate without inertia: unit weight
+            self._ref = np.maximum(self._ref, (A * A / d).sum(axis=1))
+            JJ[2 * n + np.arange(m), 2 * n + np.arange(m)] = REGULARIZATION * self._ref / cj
         if mh:
-            eps = REGULARIZATION * float(np.max(np.einsum("ij,ij->i", Ah, Ah))) / cj
-            JJ[2 * n + m + np.arange(mh), 2 * n + m + np.arange(mh)] = eps
+            self._ref_h = np.maximum(self._ref_h, (Ah * Ah).sum(axis=1))
+            idx_h = 2 * n + m + np.arange(mh)
+            JJ[idx_h, idx_h] = REGULARIZATION * self._ref_h / cj
 
     # ------------------------------------------------------------------ stepping contract
     def _check(self, res: Any) -> None:
