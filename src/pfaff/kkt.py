@@ -16,10 +16,12 @@ manifold its constraint force a·sinθ·λ vanishes with the row anyway.
 
 Two floors are used.
 
-- The integrators' right-hand side: τ_i = ``FLOOR`` · s_i per constraint row, where s_i is the
-  row's own size A_i M⁻¹ A_iᵀ at the initial state (at least 1e-3 of the largest, see
-  :func:`row_scales`), so that a row is softened only when it has shrunk against itself — not
-  because it belongs to a heavy body or a short link. Runge–Kutta stages lie off the manifold and
+- The integrators' right-hand side: τ_i = ``FLOOR`` · min(s_i, max diag S) per constraint row,
+  where s_i is the row's own size A_i M⁻¹ A_iᵀ at the initial state (:func:`row_scales`; raised
+  as a running maximum while a row starts collapsed, see :class:`pfaff.integrators.RowReference`).
+  A row is softened only when it has shrunk against itself while another row has not — not because
+  it belongs to a heavy body, a short link or carries a small constant factor, and not when all
+  rows shrink together (a one-row system is never floored). Runge–Kutta stages lie off the manifold and
   a small floor lets their drift through amplified: on the four-bar of
   ``tests/test_simulate_fourbar.py`` at rtol = 5e-13 … 5e-12, FLOOR = 1e-5 kept the angle to
   4e-12 … 3e-11 through four folds, 1e-6 to 4e-12 … 2e-8, 1e-8 to 7e-9 … 1e-6. The
