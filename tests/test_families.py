@@ -107,9 +107,8 @@ def test_project_onto_the_ring() -> None:
     assert np.max(np.abs(f)) < 1e-12 and np.max(np.abs(g)) < 1e-12 and its >= 1
 
 
-def test_chain_family_uses_sparse_solver() -> None:
-    """A planar chain of particles in Cartesian families: A_L is not square, SuperLU fallback."""
-    n = 6
+def chain_family(n: int):
+    """A planar chain of n unit particles in Cartesian families, pinned at the origin."""
     s = pfaff.System()
     x, y = s.add_family("x", n), s.add_family("y", n)
     s.add_particle(1, [x[k], y[k]], over=k)
@@ -118,7 +117,13 @@ def test_chain_family_uses_sparse_solver() -> None:
     s.add_holonomic_constraint(
         (x[k + 1] - x[k]) ** 2 + (y[k + 1] - y[k]) ** 2 - 1, "link", over=(k, 0, n - 2)
     )
-    model = s.equations().compile({})
+    return s.equations().compile({})
+
+
+def test_chain_family_uses_sparse_solver() -> None:
+    """A planar chain of particles in Cartesian families: A_L is not square, SuperLU fallback."""
+    n = 6
+    model = chain_family(n)
     assert model.solver == "sparse"
     q = np.concatenate([np.arange(1, n + 1.0), np.zeros(n)])  # straight, horizontal, at rest
     qdd, _ = model.accelerations(0.0, q, np.zeros(2 * n))
@@ -205,15 +210,7 @@ def test_simulate_family_ring_closed_form() -> None:
 def test_simulate_chain_family_projects_onto_nonlinear_constraints() -> None:
     """The SuperLU path in a projected run: Newton steps on |link| = 1, energy kept."""
     n = 6
-    s = pfaff.System()
-    x, y = s.add_family("x", n), s.add_family("y", n)
-    s.add_particle(1, [x[k], y[k]], over=k)
-    s.add_potential_energy(9.81 * y[k], over=k)
-    s.add_holonomic_constraint(x[0] ** 2 + y[0] ** 2 - 1, name="pin")
-    s.add_holonomic_constraint(
-        (x[k + 1] - x[k]) ** 2 + (y[k + 1] - y[k]) ** 2 - 1, "link", over=(k, 0, n - 2)
-    )
-    model = s.equations().compile({})
+    model = chain_family(n)
     q = np.concatenate([np.arange(1, n + 1.0), np.zeros(n)])
     traj = pfaff.simulate(model, q, np.zeros(2 * n), (0, 0.5), t_eval=[0, 0.25, 0.5])
     assert model.solver == "sparse" and traj.status == "success"
