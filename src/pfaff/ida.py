@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .errors import PfaffError
+from .projection import diagonal_weights
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 REGULARIZATION = 1e-8  # ε / (max diag A M⁻¹Aᵀ / cj) on the algebraic diagonal
@@ -133,8 +134,7 @@ class IDAStepper:
         JJ[:n, 2 * n + m :] = -Ah.T
         JJ[n : 2 * n, 2 * n : 2 * n + m] = -A.T
         if m:  # per row, relative to the row's largest size so far (a small row stays exact)
-            d = np.diag(M).copy()
-            d[~(d > 0)] = 1.0  # a coordinate without inertia: unit weight
+            d = diagonal_weights(M)
             self._ref = np.maximum(self._ref, (A * A / d).sum(axis=1))
             JJ[2 * n + np.arange(m), 2 * n + np.arange(m)] = REGULARIZATION * self._ref / cj
         if mh:

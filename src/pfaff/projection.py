@@ -58,6 +58,19 @@ def _correction(A: np.ndarray | sps.spmatrix, W: Any, r: np.ndarray) -> np.ndarr
     return Z @ _damped_solve(A @ Z, r)
 
 
+def diagonal_weights(M: Any) -> np.ndarray:
+    """The diagonal of a (dense or sparse) M, with unit weight for a coordinate without inertia.
+
+    Examples
+    --------
+    >>> diagonal_weights(np.diag([2.0, 0.0])).tolist()
+    [2.0, 1.0]
+    """
+    d = np.array(M.diagonal(), dtype=float)
+    d[~(d > 0)] = 1.0
+    return d
+
+
 def _metric(M: Any, A: np.ndarray | sps.spmatrix) -> Any:
     """Cholesky factor of the projection metric: M, or M + κAᵀA if M is singular, or diag.
 
@@ -73,9 +86,7 @@ def _metric(M: Any, A: np.ndarray | sps.spmatrix) -> Any:
     try:
         return scipy.linalg.cho_factor(M + kappa * A.T @ A)
     except np.linalg.LinAlgError:
-        d = np.diag(M).copy()
-        d[~(d > 0)] = 1.0  # a coordinate without inertia of its own: unit weight
-        return scipy.linalg.cho_factor(np.diag(d))
+        return scipy.linalg.cho_factor(np.diag(diagonal_weights(M)))
 
 
 def residuals(model: Any, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -117,9 +128,7 @@ class Projector:
         n = self.model.n
         if sps.issparse(K):
             K = sps.csr_matrix(K)
-            d, A = K[:n, :n].diagonal(), K[n:, :n]
-            d[~(d > 0)] = 1.0  # a coordinate without inertia of its own: unit weight
-            M: Any = d
+            A, M = K[n:, :n], diagonal_weights(K[:n, :n])
         else:
             A, M = K[n:, :n], K[:n, :n]
         return A, M, np.where(self.holonomic, f, 0.0), g
