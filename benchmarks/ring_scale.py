@@ -5,7 +5,7 @@ force=F)`` (the family form above N = 1024; below, ``family=True`` is forced), d
 it, and measures:
 
 ``build``
-    model -> equations -> compiled :class:`pfaff.structured.StructuredModel`, seconds
+    model -> equations -> compiled :class:`pfaff.numeric.structured.StructuredModel`, seconds
 ``solve``
     one ``model.accelerations(t, q, q̇)`` (q̈ and λ), best of 3, seconds
 ``floor``

@@ -7,7 +7,7 @@ import pytest
 import sympy as sp
 
 import pfaff
-from pfaff.structured import compile_structured
+from pfaff.derive.compile_family import compile_structured
 
 VALS = {"M": 1.3, "r": 0.4, "F": -0.8, "g": 9.81, "alpha": 0.2}
 k = sp.Symbol("k", integer=True)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import pfaff
-import pfaff.streams as streams
-from pfaff.banded import LowerBand
-from pfaff.trig import LIMIT, sincos
+import pfaff.numeric.streams as streams
+from pfaff.numeric.banded import LowerBand
+from pfaff.numeric.trig import LIMIT, sincos
 
 VALS = {"M": 2.0, "r": 0.5, "F": 3.0}
 
@@ -127,7 +127,7 @@ def _two_body_family(n: int):
 @pytest.mark.parametrize("n", [5, 300])
 def test_fused_triangular_path_matches_superlu(n: int) -> None:
     """Tᵀ M T entry by entry (three-array products, p = 2) equals the assembled KKT solve."""
-    from pfaff.structured import compile_structured
+    from pfaff.derive.compile_family import compile_structured
 
     eom = _two_body_family(n)
     tri, lu = compile_structured(eom, {}), compile_structured(eom, {}, solver="sparse")

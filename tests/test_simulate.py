@@ -300,7 +300,7 @@ def test_existing_file_replaced_whole(short: pfaff.Trajectory, tmp_path, writer:
 
 
 def test_plot(short: pfaff.Trajectory, tmp_path) -> None:
-    pytest.importorskip("pfaff.figures")
+    pytest.importorskip("pfaff.results.figures")
     pytest.importorskip("matplotlib")
     import matplotlib
 

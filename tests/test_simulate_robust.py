@@ -2,7 +2,7 @@
 clearly.
 
 * A constraint written with a small constant factor, 1e-5·(x² + y² − 1), is the same constraint:
-  the floor of :mod:`pfaff.kkt` is relative to each row's own size and must leave it exact.
+  the floor of :mod:`pfaff.numeric.kkt` is relative to each row's own size and must leave it exact.
 * A coordinate without inertia (singular M) tied to another one: every method, IDA included.
 * A particle on the unit circle and on its tangent y = 1 moving with ẋ = 1: no acceleration
   satisfies both constraints, an error rather than a motion.

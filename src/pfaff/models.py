@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from .errors import ModelError
-from .symbols import coordinates
-from .system import System
+from pfaff.api import System
+from pfaff.core.errors import ModelError
+from pfaff.core.symbols import coordinates
 
 FAMILY_FROM = 1024  # rolling_ring(n) uses the family form above this n unless told otherwise
 

@@ -1,0 +1,76 @@
+"""Lazy sequences: a length and an item function, for families too large to list (2^24 names)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+
+import numpy as np
+
+
+class LazySeq(Sequence):
+    """A read-only sequence whose items are made on demand by ``item(i)``.
+
+    ``bulk(lo, hi)``, when given, makes the items lo … hi-1 at once (a list); iteration and
+    slices use it, so that ``list(names)`` of a family of 2^20 members takes a fraction of a
+    second rather than seconds of per-item calls.
+
+    Examples
+    --------
+    >>> s = LazySeq(3, lambda i: i * i)
+    >>> list(s), s[-1], len(s[1:])
+    ([0, 1, 4], 4, 2)
+    >>> b = LazySeq(5, lambda i: f"q{i}", bulk=lambda lo, hi: [f"q{i}" for i in range(lo, hi)])
+    >>> list(b), b[1:3]
+    (['q0', 'q1', 'q2', 'q3', 'q4'], ['q1', 'q2'])
+    """
+
+    BLOCK = 1 << 16
+
+    def __init__(
+        self,
+        n: int,
+        item: Callable[[int], object],
+        bulk: Callable[[int, int], list] | None = None,
+    ) -> None:
+        self._n, self._item, self._bulk = int(n), item, bulk
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, i):  # type: ignore[override]
+        if isinstance(i, slice):
+            lo, hi, step = i.indices(self._n)
+            if self._bulk is not None and step == 1:
+                return self._bulk(lo, hi) if lo < hi else []
+            return [self._item(j) for j in range(lo, hi, step)]
+        j = int(i) + (self._n if i < 0 else 0)
+        if not 0 <= j < self._n:
+            raise IndexError(f"index {i} out of range for a sequence of {self._n}")
+        return self._item(j)
+
+    def __iter__(self) -> Iterator:
+        if self._bulk is None:
+            return (self._item(j) for j in range(self._n))
+        return (
+            x
+            for lo in range(0, self._n, self.BLOCK)
+            for x in self._bulk(lo, min(lo + self.BLOCK, self._n))
+        )
+
+    def __repr__(self) -> str:
+        head = ", ".join(str(self._item(j)) for j in range(min(self._n, 3)))
+        return f"<{self._n} items: {head}{', ...' if self._n > 3 else ''}>"
+
+
+def concat(parts: Sequence[Sequence]) -> Sequence:
+    """Concatenate sequences lazily (a tuple when every part is short)."""
+    total = sum(len(p) for p in parts)
+    if total <= 4096:
+        return tuple(x for p in parts for x in p)
+    starts = np.cumsum([0] + [len(p) for p in parts])
+
+    def item(i: int) -> object:
+        j = int(np.searchsorted(starts, i, side="right")) - 1
+        return parts[j][i - int(starts[j])]
+
+    return LazySeq(total, item)

@@ -1,0 +1,161 @@
+"""The compile stage: parameter values checked, kernels generated, a :class:`NumericModel` built."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import sympy as sp
+
+from pfaff.core.errors import ParameterError
+from pfaff.derive.blocks import Block
+from pfaff.derive.codegen import (
+    Kernel,
+    constraint_layout,
+    dynamics_layout,
+    energy_exprs,
+    make_kernel,
+)
+from pfaff.derive.fused import build_fused
+from pfaff.numeric.fused import FusedKernel
+from pfaff.numeric.model import ConstraintPart, DynamicsPart, NumericModel
+
+if TYPE_CHECKING:
+    from pfaff.derive.equations import Derivation
+
+
+def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
+    """Check and order parameter values: every symbol needed, none unknown, all finite reals."""
+    if not isinstance(given, dict):
+        raise ParameterError(
+            f"`parameters` must be a dict of symbol (or name) -> value, got {given!r}"
+        )
+    by_name = {p.name: p for p in params}
+    values: dict[sp.Symbol, object] = {}
+    problems = []
+    for key, val in given.items():
+        sym = by_name.get(key) if isinstance(key, str) else key
+        if sym not in params:
+            problems.append(
+                f"unknown parameter `{key}` (the model's are: {', '.join(by_name) or 'none'})"
+            )
+            continue
+        values[sym] = val
+    missing = [p.name for p in params if p not in values]
+    if missing:
+        problems.append(f"missing value for {', '.join(f'`{m}`' for m in missing)}")
+    out = []
+    for p in params:
+        if p not in values:
+            continue
+        v = values[p]
+        try:
+            fv = float(sp.sympify(v)) if isinstance(v, sp.Basic) else float(v)
+        except (TypeError, ValueError):
+            problems.append(f"parameter `{p}` must be a real number, got {v!r}")
+            continue
+        if not math.isfinite(fv):
+            problems.append(f"parameter `{p}` is {fv} (NaN or infinite)")
+        out.append(fv)
+    if problems:
+        raise ParameterError("bad parameters: " + "; ".join(problems))
+    return out
+
+
+def _cached(block: Block, what: str, params: tuple, build) -> Kernel:
+    cache = block.__dict__.setdefault("_kernels", {})
+    key = (what, params)
+    if key not in cache:
+        cache[key] = build()
+    return cache[key]
+
+
+def dynamics_part(block: Block, params: tuple) -> DynamicsPart:
+    """Kernel and scatter indices for a dynamics block."""
+    mass, fidx, exprs = dynamics_layout(block)
+    kern = _cached(block, "dyn", params, lambda: make_kernel(block, exprs, params))
+    energy = _cached(
+        block, "energy", params, lambda: make_kernel(block, energy_exprs(block), params)
+    )
+    c = block.coords
+    mr = np.array([c[:, a] for a, _ in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
+    mc = np.array([c[:, b] for _, b in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
+    fr = np.array([c[:, a] for a in fidx], dtype=np.int64).reshape(len(fidx), c.shape[0])
+    return DynamicsPart(kern, mr, mc, fr, energy)
+
+
+def constraint_part(block: Block, params: tuple) -> ConstraintPart:
+    """Kernel and scatter indices for a constraint block."""
+    cols, exprs = constraint_layout(block)
+    kern = _cached(block, "con", params, lambda: make_kernel(block, exprs, params))
+    c = block.coords
+    ac = np.array([c[:, a] for a in cols], dtype=np.int64).reshape(len(cols), c.shape[0])
+    return ConstraintPart(kern, block.rows, ac)
+
+
+def build_model(
+    eom: Derivation, values: list[float], *, constraints_only: bool = False
+) -> NumericModel:
+    """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values."""
+    params = tuple(eom.parameters)
+    dyn = (
+        []
+        if constraints_only
+        else [dynamics_part(b, params) for b in eom.blocks if b.local.kind == "dynamics"]
+    )
+    con = [constraint_part(b, params) for b in eom.blocks if b.local.kind == "constraint"]
+    names = {
+        "coordinates": [str(q.func) for q in eom.coordinates],
+        "multipliers": [str(s) for s in eom.multipliers],
+        "constraints": list(eom.constraint_names),
+        "holonomic_rows": np.array(eom.holonomic, dtype=bool),
+        "parameters": {p.name: v for p, v in zip(params, values, strict=True)},
+    }
+    model = NumericModel(eom.n, dyn, con, eom.m, values, names)
+    if not constraints_only:
+        model._fused = checked_fused(eom, model)
+    return model
+
+
+def checked_fused(eom: Derivation, model: NumericModel) -> FusedKernel | None:
+    """The fused kernel of a small system, if it agrees with the template kernels at a test state."""
+    try:
+        fused = build_fused(eom)
+    except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
+        return None
+    if fused is None:
+        return None
+    rng = np.random.default_rng(7)
+    t0, q, qd = 0.3, rng.uniform(0.2, 0.9, model.n), rng.uniform(-0.5, 0.5, model.n)
+    try:
+        ref = model._kkt(t0, q, qd)
+        model._fused = fused
+        new = model._kkt(t0, q, qd)
+    except Exception:
+        return None
+    finally:
+        model._fused = None
+    for a, b in zip(ref, new, strict=True):
+        if not np.allclose(a, b, rtol=1e-9, atol=1e-12 * (1 + np.max(np.abs(a), initial=0))):
+            return None
+    if fused.rfn is not None and not _rhs_agrees(fused, model, t0, q, qd):
+        fused = dataclasses.replace(fused, rfn=None)
+    return fused
+
+
+def _rhs_agrees(fused: FusedKernel, model: NumericModel, t0: float, q, qd) -> bool:
+    """The one-function right-hand side against kernel + Schur solve at the test state."""
+    p, taus, y = (*model._p, 0.0, 0.0), [0.0] * (model.m + 1), [*q.tolist(), *qd.tolist()]
+    try:
+        slow = fused.sfn(*fused.ofn(t0, *y, *p), *taus)
+        fast = fused.rfn(*p, *taus, lambda t, y: None)(t0, y)
+    except Exception:  # anything wrong here: do not use the fast function
+        return False
+    return fast is not None and np.allclose(fast, y[model.n :] + slow, rtol=1e-12, atol=1e-14)
+
+
+def compile_equations(eom: Derivation, parameters: dict) -> NumericModel:
+    """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
+    return build_model(eom, parameter_values(tuple(eom.parameters), parameters))

@@ -1,0 +1,71 @@
+"""Generic-rank test of the constraint matrix: redundant or inconsistent constraints are refused.
+
+A is evaluated at a random configuration with random parameter values; linear dependence that holds
+everywhere (a repeated, combined or contradictory constraint) shows there with probability one. The
+error names every constraint that takes part in the dependency (:func:`pfaff.numeric.rank.dependent_rows`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from pfaff.core.errors import ConstraintError
+from pfaff.derive.compile import build_model
+from pfaff.derive.compile_family import structured_model
+from pfaff.derive.equations import Derivation
+from pfaff.numeric.rank import dependent_rows
+
+NAMES_SHOWN = 8
+
+
+def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> None:
+    """Raise :class:`ConstraintError` naming the constraints that depend on one another.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> x, y = pfaff.coordinates("x y")
+    >>> s = pfaff.System([x, y]); s.add_particle(1, [x, y])
+    >>> s.add_holonomic_constraint(x - y, name="a"); s.add_holonomic_constraint(2 * x - 2 * y + 1, name="b")
+    >>> s.equations()
+    Traceback (most recent call last):
+    ...
+    pfaff.core.errors.ConstraintError: redundant or inconsistent constraints: the constraint matrix has rank 1 < 2; `a`, `b` depend on one another
+    """
+    n, m = eom.n, eom.m
+    if m == 0:
+        return
+    if m > n:
+        raise ConstraintError(
+            f"{m} constraints on {n} coordinates: more constraints than coordinates"
+        )
+    rng = np.random.default_rng(seed)
+    values = list(rng.uniform(0.7, 1.6, len(eom.parameters)))
+    q = rng.uniform(-1.3, 1.3, n)
+    tt = float(rng.uniform(0.1, 1.0))
+    with np.errstate(all="ignore"):
+        if eom.family:
+            model = structured_model(eom, values, solver="none")
+            if model.proves_full_rank(tt, q):  # raises on a zero pivot
+                return
+        else:
+            model = build_model(eom, values, constraints_only=True)
+        A = model.constraint_matrix(tt, q)
+    data = A.data if hasattr(A, "data") and not isinstance(A, np.ndarray) else A
+    if not np.all(np.isfinite(data)):
+        return  # a singular random point; the numeric solve will report real problems
+    rank, rows = dependent_rows(A)
+    if rows.size:
+        raise ConstraintError(
+            "redundant or inconsistent constraints: the constraint matrix has rank "
+            f"{rank} < {m}; {dependency_names(eom.constraint_names, rows)} depend on one another"
+        )
+
+
+def dependency_names(names: Sequence[str], rows: np.ndarray) -> str:
+    """The first few constraint names of ``rows`` in backticks, and a count of the rest."""
+    shown = ", ".join(f"`{names[int(i)]}`" for i in rows[:NAMES_SHOWN])
+    more = rows.size - NAMES_SHOWN
+    return shown + (f" and {more} more" if more > 0 else "")

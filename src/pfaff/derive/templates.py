@@ -1,0 +1,182 @@
+"""The derivation stage: per-template Lagrange terms, grouped into blocks.
+
+For each distinct local form (template) of a model piece the terms of
+
+    M q̈ + h = Q + Aᵀλ,    A q̈ + (Ȧ q̇ + ḃ) = 0
+
+are derived once, in local placeholder coordinates. A particle of mass m at r(q,t) contributes
+M = m JᵀJ and h = m Jᵀ(J̇ q̇ + ṙ_t) with J = ∂r/∂q; a Lagrangian term L contributes M = ∂²L/∂q̇²,
+h = (∂²L/∂q̇∂q) q̇ + ∂²L/∂q̇∂t - ∂L/∂q; a force F at r contributes Q = Jᵀ F. Nothing is ever
+differentiated or simplified at the size of the whole system.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from pfaff.core.errors import ModelError
+from pfaff.core.symbols import local_q, local_qd, t
+from pfaff.derive.blocks import Block, Local
+from pfaff.derive.equations import Derivation
+from pfaff.derive.memory import check_memory
+from pfaff.derive.rank import check_constraint_rank
+from pfaff.mechanics.system import Piece, SystemSpec
+
+_TRIG = (sp.sin, sp.cos, sp.tan)
+
+
+def _tidy(e: sp.Expr) -> sp.Expr:
+    """Cheap per-template clean-up: combine sin² + cos² in small expressions.
+
+    SymPy's ``trigsimp`` costs about a second on 60 operations with two angles, so bigger
+    expressions go through Fu's rules first (a tenth of that) and ``trigsimp`` sees only what
+    they left, when it is small.
+    """
+    if not e.has(*_TRIG):
+        return e
+    n = sp.count_ops(e)
+    if n > 80:
+        return e
+    s = e if n <= 24 else sp.fu(e)
+    if sp.count_ops(s) <= 24:
+        s = sp.trigsimp(s)
+    return s if sp.count_ops(s) <= n else e
+
+
+def _qs(k: int) -> tuple[list[sp.Symbol], list[sp.Symbol]]:
+    return [local_q(a) for a in range(k)], [local_qd(a) for a in range(k)]
+
+
+def dt_bias(e: sp.Expr, k: int) -> sp.Expr:
+    """Time derivative of e(q, q̇, t) with q̈ = 0: Σ ∂e/∂q_a q̇_a + ∂e/∂t."""
+    q, qd = _qs(k)
+    return sp.Add(*(e.diff(q[a]) * qd[a] for a in range(k)), e.diff(t))
+
+
+def _particle(key: tuple, k: int) -> Local:
+    m, r = key[2], key[3:]
+    q, qd = _qs(k)
+    J = [[rc.diff(q[a]) for a in range(k)] for rc in r]
+    v = [
+        sp.Add(*(Jc[a] * qd[a] for a in range(k)), rc.diff(t)) for Jc, rc in zip(J, r, strict=True)
+    ]
+    acc = [dt_bias(vc, k) for vc in v]
+    loc = Local("dynamics", k, kinetic=m * sp.Add(*(vc**2 for vc in v)) / 2)
+    for a in range(k):
+        for b in range(a, k):
+            e = _tidy(m * sp.Add(*(Jc[a] * Jc[b] for Jc in J)))
+            if e != 0:
+                loc.mass[a, b] = loc.mass[b, a] = e
+        e = _tidy(m * sp.Add(*(Jc[a] * ac for Jc, ac in zip(J, acc, strict=True))))
+        if e != 0:
+            loc.h[a] = e
+    return loc
+
+
+def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
+    q, qd = _qs(k)
+    for a in range(k):
+        p = L.diff(qd[a])
+        for b in range(k):
+            e = p.diff(qd[b])
+            if e != 0:
+                loc.mass[a, b] = _tidy(e)
+        e = sp.Add(*(p.diff(q[b]) * qd[b] for b in range(k)), p.diff(t), -L.diff(q[a]))
+        if e != 0:
+            loc.h[a] = _tidy(e)
+    return loc
+
+
+def _force(key: tuple, k: int) -> Local:
+    dim = key[1]
+    F, r = key[2 : 2 + dim], key[2 + dim :]
+    q, _ = _qs(k)
+    loc = Local("dynamics", k)
+    for a in range(k):
+        e = sp.Add(*(Fc * rc.diff(q[a]) for Fc, rc in zip(F, r, strict=True)))
+        if e != 0:
+            loc.Q[a] = e
+    return loc
+
+
+def _constraint(key: tuple, k: int) -> Local:
+    q, qd = _qs(k)
+    e = key[2]
+    loc = Local("constraint", k)
+    if key[0] == "holonomic":
+        loc.f = e
+        loc.A = {a: d for a in range(k) if (d := e.diff(q[a])) != 0}
+        loc.b = e.diff(t)
+        g = sp.Add(*(loc.A[a] * qd[a] for a in loc.A), loc.b)
+    else:
+        loc.A = {a: d for a in range(k) if (d := e.diff(qd[a])) != 0}
+        loc.b = e.xreplace(dict.fromkeys(qd, sp.S.Zero))
+        g = e
+    loc.bias = dt_bias(g, k)
+    return loc
+
+
+def derive_template(key: tuple, k: int) -> Local:
+    """Derive the local contributions of one template (see the module docstring)."""
+    kind = key[0]
+    if kind == "particle":
+        return _particle(key, k)
+    if kind == "kinetic":
+        return _lagrangian(key[2], k, Local("dynamics", k, kinetic=key[2]))
+    if kind == "potential":
+        return _lagrangian(-key[2], k, Local("dynamics", k, potential=key[2]))
+    if kind == "force":
+        return _force(key, k)
+    if kind == "genforce":
+        return Local("dynamics", k, Q={key[1]: key[2]})
+    return _constraint(key, k)
+
+
+def group(system: SystemSpec) -> list[Block]:
+    """Group the model's pieces by template and derive each template once."""
+    groups: dict[tuple, list[tuple[Piece, int]]] = {}
+    row = 0
+    cache: dict[tuple, Local] = {}
+    blocks = []
+    for p in system.pieces:
+        is_con = p.kind in ("holonomic", "velocity")
+        if p.template is not None:
+            blocks.append(_family_block(p, row if is_con else -1, cache))
+        else:
+            groups.setdefault(p.key, []).append((p, row if is_con else -1))
+        row += p.count if is_con else 0
+    for key, members in groups.items():
+        local = _derived(key, len(members[0][0].coords), cache)
+        coords = np.array([p.coords for p, _ in members], dtype=np.int64).reshape(len(members), -1)
+        rows = (
+            np.array([r for _, r in members], dtype=np.int64)
+            if local.kind == "constraint"
+            else None
+        )
+        blocks.append(Block(local, coords, rows, [p for p, _ in members]))
+    return blocks
+
+
+def _derived(key: tuple, k: int, cache: dict) -> Local:
+    if key not in cache:
+        cache[key] = derive_template(key, k)
+    return cache[key]
+
+
+def _family_block(p: Piece, row0: int, cache: dict) -> Block:
+    tm = p.template
+    local = _derived(p.key, len(tm.slots), cache)
+    prog = [tm.progression(a) for a in range(len(tm.slots))]
+    return Block(local, None, None, [p], progressions=prog, n_inst=tm.count, row0=row0)
+
+
+def derive(system: SystemSpec) -> Derivation:
+    """Derive the equations of motion of ``system`` and check its constraints for redundancy."""
+    if system.n == 0:
+        raise ModelError("a system needs at least one coordinate (ordinary or in a family)")
+    eom = Derivation(system, group(system))
+    if eom.family:
+        check_memory(eom)
+    check_constraint_rank(eom)
+    return eom

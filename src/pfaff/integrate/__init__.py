@@ -1,0 +1,1 @@
+"""The integration stage: ``simulate``, projection, Baumgarte, IDA, the float DOP853, initial states."""

@@ -1,0 +1,181 @@
+"""ODE-based methods: the acceleration-level equations integrated by SciPy's adaptive Runge–Kutta.
+
+Two separate ideas share one stepping contract (``t``, ``state()``, ``step()``, ``dense(ts)``,
+``stats``):
+
+- :class:`ProjectedRK` ("projection") integrates q̈ = q̈(q, q̇, t) from the KKT solve and, after
+  every accepted step, projects the state back onto f = 0, A q̇ + b = 0 (:mod:`pfaff.projection`);
+  the Runge–Kutta method restarts from the projected state.
+- :class:`BaumgarteRK` ("baumgarte") changes the vector field instead: the constraint rows of the
+  KKT system ask for A q̈ + Ȧq̇ + ḃ = −2α (A q̇ + b) − β² f, so that the drift obeys a damped
+  linear equation rather than growing.
+
+Small fused models run DOP853 on Python floats (:mod:`pfaff.fastrk`), others SciPy's solvers.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.integrate import DOP853, RK23, RK45
+
+from pfaff.core.errors import PfaffError, StateError
+from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
+from pfaff.integrate.projection import Projector
+from pfaff.numeric.kkt import RESCALE_BELOW
+
+RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
+
+
+def acceleration_field(
+    model: Any, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None
+):
+    """y' = [q̇, q̈] with y = [q, q̇], q̈ from the (optionally Baumgarte-stabilized) KKT solve.
+
+    ``start`` = (t0, q0, q̇0) sets the reference constraint row sizes of the floor that carries
+    the solve through rank loss (:mod:`pfaff.kkt`).
+    """
+    if hasattr(model, "_row_scales"):  # NumericModel
+        scales = model._row_scales(*start) if start is not None else None
+        fun = model._ode_function(alpha, beta, scales)
+        fun.rows = RowReference(model, fun, scales)
+        return fun
+    if hasattr(model, "_ode_function"):  # a model with its own (e.g. structured O(N)) field
+        return model._ode_function(alpha, beta)
+    n, solve = model.n, model._solve_accelerations
+
+    def fun(t: float, y: np.ndarray) -> np.ndarray:
+        return np.concatenate([y[n:], solve(t, y[:n], y[n:], alpha, beta)[0]])
+
+    return fun
+
+
+class RowReference:
+    """Reference sizes of the constraint rows for the floor of :mod:`pfaff.kkt`, kept current.
+
+    A row that starts (nearly) collapsed — a linkage released from a flat configuration — has
+    no size of its own yet; while any row is below 1e-3 of the largest, the sizes at each
+    accepted step raise the references (a running maximum), and the right-hand side is rebuilt.
+    """
+
+    def __init__(self, model: Any, fun: Any, scales: np.ndarray | None) -> None:
+        self.model, self.fun, self.ref = model, fun, scales
+        self.active = scales is not None and hasattr(fun, "rescale") and self._small_rows()
+
+    def _small_rows(self) -> bool:
+        return bool((self.ref < RESCALE_BELOW * self.ref.max()).any())
+
+    def update(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        if not self.active:
+            return
+        now = self.model._row_scales(t, q, qd)
+        if now is None:
+            return
+        new = np.maximum(self.ref, now)
+        if (new > self.ref).any():
+            self.ref = new
+            self.fun.rescale(new)
+        self.active = self._small_rows()
+
+
+class _RKStepper:
+    """One SciPy Runge–Kutta solver driven step by step."""
+
+    def __init__(
+        self,
+        fun: Any,
+        t0: float,
+        y0: np.ndarray,
+        t_end: float,
+        opts: dict,
+    ) -> None:
+        name = opts.get("integrator", "DOP853")
+        if name not in RK_METHODS:
+            raise StateError(
+                f"`integrator` must be one of {', '.join(RK_METHODS)} (explicit Runge–Kutta, "
+                f"which can restart from a projected state); got {name!r}"
+            )
+        kw = {k: opts[k] for k in ("max_step", "first_step") if opts.get(k) is not None}
+        on_lists = getattr(fun, "on_lists", None)
+        if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
+            self.solver: Any = FloatDOP853(
+                on_lists, fun, t0, y0, t_end, opts["rtol"], opts["atol"], **kw
+            )
+        else:
+            self.solver = RK_METHODS[name](
+                fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], **kw
+            )
+        self.fun = fun
+        self.n = len(y0) // 2
+        self.stats = {"steps": 0, "rejected": 0, "nfev": 0}
+        self._attempt_nfev = self.solver.n_stages
+        self._dense = self._y_raw = None
+        self._restarts = 0
+
+    @property
+    def t(self) -> float:
+        return float(self.solver.t)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        y = self.solver.y
+        return y[: self.n], y[self.n :]
+
+    def step(self) -> None:
+        before = self.solver.nfev
+        msg = self.solver.step()
+        used = self.solver.nfev - before
+        if self.solver.status == "failed":
+            raise PfaffError(f"the integrator failed at t = {self.solver.t:.17g}: {msg}")
+        self.stats["steps"] += 1
+        self.stats["rejected"] += max(used // self._attempt_nfev - 1, 0)
+        self._dense = self._y_raw = None
+        rows = getattr(self.fun, "rows", None)
+        if rows is not None and rows.active:
+            rows.update(self.t, *self.state())
+
+    def dense(self, ts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """States inside the last step (before any projection of its end point)."""
+        if self._dense is None:
+            s = self.solver
+            y, s.y = s.y, self._y_raw if self._y_raw is not None else s.y
+            try:
+                self._dense = s.dense_output()
+            finally:
+                s.y = y
+        Y = self._dense(ts)
+        return [(Y[: self.n, i], Y[self.n :, i]) for i in range(len(ts))]
+
+    def finish(self) -> dict:
+        self.stats["nfev"] = self.solver.nfev + self._restarts
+        return self.stats
+
+
+class ProjectedRK(_RKStepper):
+    """Runge–Kutta on the acceleration-level ODE with projection after every accepted step."""
+
+    def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+        fun = acceleration_field(model, start=(t0, q0, qd0))
+        super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)
+        self.projector: Projector = opts["projector"]
+
+    def step(self) -> None:
+        super().step()
+        t = self.t
+        q, qd = self.state()
+        q, qd, changed = self.projector(t, q, qd)
+        if changed:
+            s = self.solver
+            self._y_raw = s.y  # the step's interpolant ends here (see dense)
+            s.y = np.concatenate([q, qd])
+            s.f = self.fun(t, s.y)  # restart the FSAL stage from the projected state
+            self._restarts += 1
+
+
+class BaumgarteRK(_RKStepper):
+    """Runge–Kutta on the Baumgarte-stabilized acceleration-level ODE (no projection)."""
+
+    def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+        alpha, beta = opts["alpha"], opts["beta"]
+        fun = acceleration_field(model, alpha, beta, start=(t0, q0, qd0))
+        super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)

@@ -1,0 +1,336 @@
+"""``pfaff.simulate``: integrate a compiled model with the constraint drift under control.
+
+The driver checks the input, makes the initial state consistent (or refuses it), runs one of the
+methods step by step (progress bar, Ctrl-C), records projected states, and post-processes them
+into a :class:`pfaff.Trajectory` (q̈, λ, energies and residuals evaluated at every reported state).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from pfaff.core.errors import PfaffError, SimulationError, StateError
+from pfaff.integrate.ida import IDAStepper
+from pfaff.integrate.integrators import BaumgarteRK, ProjectedRK
+from pfaff.integrate.projection import Projector, residuals
+from pfaff.results.trajectory import Trajectory
+
+METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
+
+
+def _span(t_span: object) -> tuple[float, float]:
+    try:
+        t0, t1 = (float(v) for v in t_span)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise StateError(f"`t_span` must be two numbers (t0, t_end); got {t_span!r}") from None
+    if not (math.isfinite(t0) and math.isfinite(t1)):
+        raise StateError(f"`t_span` must be finite; got ({t0}, {t1})")
+    if t1 <= t0:
+        kind = "empty" if t1 == t0 else "reversed"
+        raise StateError(f"`t_span` is {kind}: t_end = {t1:g} must be greater than t0 = {t0:g}")
+    return t0, t1
+
+
+def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
+    if t_eval is None:
+        return None
+    try:
+        te = np.asarray(t_eval, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise StateError("`t_eval` must be an array of times") from None
+    if not np.isfinite(te).all():
+        raise StateError("`t_eval` contains NaN or infinity")
+    if te.size == 0 or np.any(np.diff(te) <= 0):
+        raise StateError("`t_eval` must be non-empty and strictly increasing")
+    if te[0] < t0 or te[-1] > t1:
+        raise StateError(f"`t_eval` must lie inside t_span [{t0:g}, {t1:g}]")
+    return te
+
+
+def _options(method: str, kw: dict) -> dict:
+    if method not in METHODS:
+        raise StateError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol"):
+        v = kw[key]
+        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+            raise StateError(f"`{key}` must be a finite number >= 0; got {v!r}")
+    if kw.get("ida_jacobian") not in (None, "fd", "approximate"):
+        raise StateError(
+            f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r}"
+        )
+    if kw["rtol"] <= 0 or kw["atol"] <= 0 or kw["constraint_tol"] <= 0:
+        raise StateError("`rtol`, `atol` and `constraint_tol` must be positive")
+    return kw
+
+
+def initial_state(
+    model: Any, t0: float, q0: object, qd0: object, projector: Projector, opts: dict
+) -> tuple[np.ndarray, np.ndarray]:
+    """Check (q0, q̇0) against the constraints; polish it onto them, or refuse it with the residual."""
+    t0, q, qd = model._state(t0, q0, qd0)
+    if model.m == 0:
+        return q, qd
+    f, g = residuals(model, t0, q, qd)
+    f = np.where(projector.holonomic, f, 0.0)
+    worst = max(np.abs(f).max(), np.abs(g).max())
+    if worst > opts["initial_tol"] and not opts["project_initial"]:
+        i = int(np.argmax(np.maximum(np.abs(f), np.abs(g))))
+        raise StateError(
+            f"the initial state is off the constraint manifold: max |f| = {np.abs(f).max():.3g}, "
+            f"max |A q̇ + b| = {np.abs(g).max():.3g} (worst: constraint "
+            f"`{model.constraint_names[i]}`). Use pfaff.consistent_state to complete a state from "
+            "independent coordinates, or pass project_initial=True to project it"
+        )
+    q, qd, _ = projector(t0, q, qd)
+    if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
+        raise StateError("the initial state could not be projected onto the constraints")
+    if hasattr(model, "_row_scales"):
+        model._solve_accelerations(t0, q, qd)  # raises if no q̈ satisfies the constraints here
+    return q, qd
+
+
+def simulate(
+    model: Any,
+    q0: Sequence[float] | np.ndarray,
+    qd0: Sequence[float] | np.ndarray,
+    t_span: tuple[float, float],
+    *,
+    method: str = "projection",
+    rtol: float = 1e-9,
+    atol: float = 1e-11,
+    t_eval: Sequence[float] | np.ndarray | None = None,
+    integrator: str = "DOP853",
+    max_step: float | None = None,
+    first_step: float | None = None,
+    alpha: float = 10.0,
+    beta: float = 10.0,
+    constraint_tol: float = 1e-12,
+    initial_tol: float = 1e-8,
+    project_initial: bool = False,
+    project_output: bool | None = None,
+    ida_jacobian: str | None = None,
+    progress: bool | None = None,
+    throw: bool = False,
+) -> Trajectory:
+    """Simulate a compiled model from (q0, q̇0) over ``t_span``.
+
+    Parameters
+    ----------
+    model : NumericModel
+        From ``EquationsOfMotion.compile``.
+    q0, qd0 : array_like, shape (n,)
+        Initial coordinates and speeds (checked against the constraints).
+    t_span : (float, float)
+        Start and end time, end > start.
+    method : {"projection", "baumgarte", "ida"}
+        "projection" (default): adaptive Runge–Kutta on the acceleration-level equations, the state
+        projected mass-orthogonally onto f = 0 and A q̇ + b = 0 after every step; passes
+        configurations where A loses rank (see :mod:`pfaff.kkt`). "baumgarte": the stabilized
+        field A q̈ + Ȧq̇ + ḃ = −2α(A q̇ + b) − β² f, no projection (through such configurations
+        only with α, β fast against the motion). "ida": SUNDIALS IDA on the index-2 GGL
+        formulation.
+    rtol, atol : float
+        Integrator tolerances.
+    t_eval : array_like, shape (k,), optional
+        Report these times (interpolated, then projected); default: every step.
+    integrator : {"DOP853", "RK45", "RK23"}
+        Runge–Kutta method of "projection" and "baumgarte".
+    max_step, first_step : float, optional
+    alpha, beta : float
+        Baumgarte gains (1/time); α = β damps the drift critically. Choose them a few times faster
+        than the motion's own rates.
+    constraint_tol : float
+        Target max |f| and max |A q̇ + b| of projected states.
+    initial_tol : float
+        Largest initial residual polished away silently; beyond it the state is refused unless
+        ``project_initial``.
+    project_initial : bool
+        Project an inconsistent initial state instead of raising.
+    project_output : bool, optional
+        Project reported states (default: yes, except for "baumgarte", whose drift is reported).
+    ida_jacobian : {"fd", "approximate"}, optional
+        IDA's Newton matrix: finite differences (default up to 80 unknowns) or assembled from M
+        and A without curvature terms (default beyond).
+    progress : bool, optional
+        Progress bar on stderr for runs longer than a second; default: when stderr is a terminal.
+    throw : bool
+        Raise :class:`pfaff.errors.SimulationError` instead of returning a failed trajectory.
+
+    Returns
+    -------
+    Trajectory
+        ``status`` is "success", "failed" (with the time and reason in ``message``) or
+        "interrupted" (Ctrl-C; the part computed so far is kept).
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    >>> traj = pfaff.simulate(model, [0.0, -1.0], [1.0, 0.0], (0, 2), t_eval=[0, 1, 2])
+    >>> traj.q.shape, traj.status
+    ((3, 2), 'success')
+    """
+    t0, t1 = _span(t_span)
+    te = _t_eval(t_eval, t0, t1)
+    opts = _options(
+        method,
+        dict(
+            rtol=rtol,
+            atol=atol,
+            alpha=alpha,
+            beta=beta,
+            constraint_tol=constraint_tol,
+            integrator=integrator,
+            max_step=max_step,
+            first_step=first_step,
+            initial_tol=initial_tol,
+            project_initial=project_initial,
+            ida_jacobian=ida_jacobian,
+        ),
+    )
+    projector = Projector(model, tol=constraint_tol)
+    q0a, qd0a = initial_state(model, t0, q0, qd0, projector, opts)
+    opts["projector"] = projector
+    stepper = METHODS[method](model, t0, q0a, qd0a, t1, opts)
+    if project_output is None:
+        project_output = method != "baumgarte"
+    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress)
+    status, message = run.go(q0a, qd0a)
+    if status != "success" and throw:
+        raise SimulationError(message)
+    stats = {**stepper.finish(), **projector.stats, "cpu_time": run.cpu}
+    return _trajectory(model, method, run, status, message, stats, projector, project_output)
+
+
+class _Run:
+    """The stepping loop: records states, drives the progress bar, catches Ctrl-C and failures."""
+
+    def __init__(self, stepper, projector, te, t0: float, t1: float, progress) -> None:
+        self.stepper, self.projector, self.te = stepper, projector, te
+        self.project_steps = not isinstance(stepper, ProjectedRK)  # its steps end projected
+        self.t0, self.t1 = t0, t1
+        self.progress = sys.stderr.isatty() if progress is None else bool(progress)
+        self.T: list[float] = []
+        self.Q: list[np.ndarray] = []
+        self.QD: list[np.ndarray] = []
+        self.cpu = 0.0
+
+    def _record(self, t: float, q: np.ndarray, qd: np.ndarray, project: bool) -> None:
+        if project and self.projector is not None:
+            q, qd, _ = self.projector(t, q, qd)
+        self.T.append(t)
+        self.Q.append(np.array(q))
+        self.QD.append(np.array(qd))
+
+    def _bar(self):
+        if not self.progress:
+            return None
+        from tqdm import tqdm
+
+        return tqdm(
+            total=self.t1 - self.t0, delay=1.0, unit="s", unit_scale=True, file=sys.stderr,
+            desc="simulating", bar_format="{desc}: {percentage:3.0f}%|{bar}| t={n:.4g}/{total:.4g} [{elapsed}<{remaining}]",
+        )  # fmt: skip
+
+    def go(self, q0: np.ndarray, qd0: np.ndarray) -> tuple[str, str]:
+        st, te = self.stepper, self.te
+        k = 0  # next t_eval index
+        if te is None or te[0] == self.t0:
+            self._record(self.t0, q0, qd0, False)
+            k = 1 if te is not None else 0
+        bar = self._bar()
+        start = time.process_time()
+        status, message = "success", "reached the end of the time span"
+        try:
+            while st.t < self.t1:
+                t_prev = st.t
+                st.step()
+                if te is None:
+                    self._record(st.t, *st.state(), self.project_steps)
+                else:
+                    j = int(np.searchsorted(te, st.t, side="right"))
+                    if j > k:
+                        for ti, (q, qd) in zip(te[k:j], st.dense(te[k:j]), strict=True):
+                            self._record(float(ti), q, qd, True)
+                        k = j
+                if bar is not None:
+                    bar.update(st.t - t_prev)
+        except KeyboardInterrupt:
+            status, message = "interrupted", f"interrupted by the user at t = {st.t:.17g}"
+        except (PfaffError, FloatingPointError, np.linalg.LinAlgError, ArithmeticError) as e:
+            status, message = "failed", f"failed at t = {st.t:.17g}: {e}"
+        except ValueError as e:  # a math domain error in compiled scalar code (sqrt of x < 0, ...)
+            status, message = (
+                "failed",
+                f"failed at t = {st.t:.17g}: the equations are not defined there ({e})",
+            )
+        finally:
+            self.cpu = time.process_time() - start
+            if bar is not None:
+                bar.close()
+        return status, message
+
+
+def _evaluate(model: Any, T: np.ndarray, Q: np.ndarray, QD: np.ndarray) -> dict:
+    """q̈, λ, f, g and energies at every reported state (batched when the model can)."""
+    if hasattr(model, "evaluate_states"):
+        return model.evaluate_states(T, Q, QD)
+    k, n, m = len(T), model.n, model.m
+    out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m))}
+    out |= {key: np.zeros((k, m)) for key in ("f", "g")}
+    out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
+    for i in range(k):
+        t, q, qd = float(T[i]), Q[i], QD[i]
+        out["qdd"][i], out["multipliers"][i] = model._solve_accelerations(t, q, qd)
+        out["f"][i], out["g"][i] = residuals(model, t, q, qd)
+        out["T"][i], out["V"][i] = model.energy(t, q, qd)
+        out["T0"][i] = model.energy(t, q, np.zeros(n))[0]
+        out["T2"][i] = 0.5 * (out["T"][i] + model.energy(t, q, -qd)[0]) - out["T0"][i]
+    return out
+
+
+def _stacked(rows: list, n: int) -> np.ndarray:
+    """The recorded states as one (k, n) array; the list is emptied (no second copy alive)."""
+    out = np.stack(rows) if rows else np.zeros((0, n))
+    rows.clear()
+    return out
+
+
+def _trajectory(model, method, run, status, message, stats, projector, project_output):
+    n, m = model.n, model.m
+    T = np.array(run.T)
+    Q, QD = _stacked(run.Q, n), _stacked(run.QD, n)
+    ev = _evaluate(model, T, Q, QD) if len(T) else None
+    if ev is None:
+        z, zm = np.zeros((0, n)), np.zeros((0, m))
+        ev = {"qdd": z, "multipliers": zm, "f": zm, "g": zm, "T": T, "V": T, "T0": T, "T2": T}
+    res = ev.get("residual")  # a model may give f and g as views of one (k, 2, m) array
+    if res is None:
+        res = np.empty((len(T), 2, m))  # filled in place: no np.where / np.stack copies
+        res[:, 0], res[:, 1] = ev.pop("f"), ev.pop("g")
+    res[:, 0, ~np.asarray(model.holonomic, dtype=bool)] = 0.0
+    return Trajectory(
+        t=T,
+        q=Q,
+        qd=QD,
+        qdd=ev["qdd"],
+        multipliers=ev["multipliers"],
+        kinetic=ev["T"],
+        potential=ev["V"],
+        jacobi=ev["T2"] - ev["T0"] + ev["V"],
+        constraint_residual=res,
+        stats=stats,
+        status=status,
+        message=message,
+        method=method,
+        coordinate_names=list(model.coordinate_names),
+        multiplier_names=list(model.multiplier_names),
+        parameters=dict(model.parameters),
+        projector=projector if project_output else None,
+    )

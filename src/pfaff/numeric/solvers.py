@@ -1,0 +1,377 @@
+"""KKT solvers of :class:`pfaff.structured.StructuredModel`, chosen once from the structure.
+
+Measured on the 2-core development machine for the rolling ring (``benchmarks/ring_scale.py``):
+at N = 2^20 SuperLU on the assembled augmented matrix takes about 2 s per solve (and 16 GB-class
+fill-in budgets beyond), LAPACK's tridiagonal Cholesky of the Schur complement A M⁻¹ Aᵀ about
+0.03 s, and the triangular null-space elimination below about 0.02 s, all of it streaming. The
+triangular path needs neither a factorization nor an inverse of M, so it is the fast path; SuperLU
+with a reused fill-reducing ordering is the general fallback. CHOLMOD (scikit-sparse) and qdldl
+would need a compiled dependency for a path that is not the fast one, so they are not used.
+
+When the constraint Jacobian is constant (the ring's), T = [I; -A_L⁻¹A_G] and M_const T are made
+at build time and a solve touches only the state-dependent mass entries: TᵀMT is summed entry by
+entry and M T is never formed, so a solve for q̈ alone (the integrators' right-hand side) streams
+the varying entries, q̈ and T once each. Level-1 BLAS runs in blocks below OpenBLAS's threading
+threshold (see :data:`pfaff.streams.BLAS_BLOCK`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+from pfaff.core.errors import ConstraintError
+from pfaff.numeric.banded import LowerBand
+from pfaff.numeric.streams import (
+    Index,
+    add_product,
+    axpy,
+    dot,
+    dot3,
+    indices,
+    scale,
+    scatter_add,
+    take,
+)
+
+P_MAX = 32  # ordinary coordinates for the dense projected system
+W_MAX = 8  # bandwidth of the triangular constraint structure
+
+
+@dataclass
+class TriangularPlan:
+    """Where each constraint entry goes: the band of A_L (offset) or a column of A_G."""
+
+    p: int
+    w: int
+    band: list = field(default_factory=list)  # (block, entry, offset, rows Index)
+    border: list = field(default_factory=list)  # (block, entry, g, rows Index)
+
+
+def triangular_plan(model) -> TriangularPlan | None:
+    """The triangular structure of A, or None when A_L is not square banded lower triangular."""
+    p, m = model.p, model.m
+    if m == 0 or m != model.n - p or p > P_MAX:
+        return None
+    plan = TriangularPlan(p, 0)
+    diag = np.zeros(m, dtype=bool)
+    for bi, part in enumerate(model._con):
+        rows = part.rows
+        if not isinstance(rows, Index) or (rows.step != 1 and rows.count > 1):
+            return None
+        for ei, c in enumerate(part.cols):
+            if not isinstance(c, Index):
+                return None
+            if c.fixed or c.count == 1:
+                if c.start < p:
+                    plan.border.append((bi, ei, c.start, rows))
+                    continue
+                if c.fixed:
+                    return None
+            if c.start < p or (c.count > 1 and c.step != 1):
+                return None
+            off = rows.start - (c.start - p)
+            if not 0 <= off <= W_MAX:
+                return None
+            plan.band.append((bi, ei, off, rows))
+            plan.w = max(plan.w, off)
+            if off == 0:
+                diag[rows.slice()] = True
+    return plan if diag.all() else None
+
+
+class TriangularSolver:
+    """Null-space elimination through the triangular A_L (see :mod:`pfaff.numeric.structured`)."""
+
+    name = "triangular"
+
+    def __init__(self, model, plan: TriangularPlan) -> None:
+        self.model, self.plan = model, plan
+        m, p = model.m, plan.p
+        self.R0 = np.zeros((plan.w + 1, m))
+        self.G0 = np.zeros((p, m))
+        self.var_band, self.var_border = [], []
+        for bi, ei, off, rows in plan.band:
+            val = model._con[bi].acc.const[ei]
+            if val is None:
+                self.var_band.append((bi, ei, off, rows))
+            else:
+                scatter_add(self.R0[off], rows, val)
+        for bi, ei, g, rows in plan.border:
+            val = model._con[bi].acc.const[ei]
+            if val is None:
+                self.var_border.append((bi, ei, g, rows))
+            else:
+                scatter_add(self.G0[g], rows, val)
+        self.f_local_zero = all(
+            isinstance(ix, Index) and (ix.fixed or ix.count == 1) and ix.start < p
+            for part in model._dyn
+            for ix in part.forcing
+        )
+        self._v = np.zeros(model.n)  # work vectors, touched now rather than in the first solve
+        self._MT = [np.zeros(model.n) for _ in range(p)]
+        for x in [self._v, *self._MT]:
+            x.fill(0.0)
+        self.band = None if self.var_band else LowerBand(self.R0, constant=True)
+        self.T: np.ndarray | None = None  # T = [I; -Z], rows (p, n), when constant
+        self.C: np.ndarray | None = None  # M_const T, rows (p, n), when T is constant
+        if self.band is not None:
+            self.band.check()
+            if not self.var_border:
+                self.T = self._t(self.band, self.G0)
+                self.C = self._const_mt(self.T)
+                self.TC = self.T @ self.C.T  # Tᵀ M_const T, (p, p)
+
+    def _const_mt(self, T: np.ndarray) -> np.ndarray:
+        """M_const T: the state-independent mass entries times T, rows (p, n)."""
+        model = self.model
+        const = [
+            [0.0 if c is None else c for c in part.kernel.const[: len(part.upper)]]
+            for part in model._dyn
+        ]
+        return np.array([model.matvec(const, T[g]) for g in range(len(T))]).reshape(T.shape)
+
+    def _t(self, band: LowerBand, G: np.ndarray) -> np.ndarray:
+        """T = [I; -A_L⁻¹ A_G] as rows (p, n): a basis of the null space of A."""
+        p, m = G.shape
+        T = np.zeros((p, p + m))
+        T[:, :p] = np.eye(p)
+        if p:
+            T[:, p:] = band.solve(G.T).T
+            np.negative(T[:, p:], out=T[:, p:])
+        return T
+
+    def factor(self, avals: list) -> tuple[LowerBand, np.ndarray]:
+        """The band of A_L and T = [I; -Z] at the given A-entry values (constant parts reused).
+
+        Raises :class:`ConstraintError` on a zero pivot of A_L (then A has lost rank).
+        """
+        band, T = self.band, self.T
+        if band is None:
+            R = self.R0.copy()
+            for bi, ei, off, rows in self.var_band:
+                scatter_add(R[off], rows, avals[bi][ei])
+            band = LowerBand(R, constant=False)
+            band.check()
+        if T is None:
+            G = self.G0.copy()
+            for bi, ei, g, rows in self.var_border:
+                scatter_add(G[g], rows, avals[bi][ei])
+            T = self._t(band, G)
+        return band, T
+
+    def solve(
+        self,
+        mvals: list,
+        f: np.ndarray,
+        avals: list,
+        c: np.ndarray | None,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero).
+
+        q̈ is written to ``out`` when given; λ is None unless ``multipliers``.
+        """
+        model, p = self.model, self.plan.p
+        band, T = self.factor(avals)
+        TL = T[:, p:]  # -Z
+        n = model.n
+        r0 = f
+        if c is not None:  # w = A_L⁻¹ c; f - M[0; w]
+            w = band.solve(c)
+            self._v[:p] = 0.0
+            self._v[p:] = w
+            r0 = f - model.matvec(mvals, self._v)
+        fl = None if c is None and self.f_local_zero else r0[p:]
+        fused = c is None and self.C is not None
+        if fused:  # TᵀMT = Tᵀ M_const T (build time) + Tᵀ M_varying T: M T never formed
+            Mr = self.TC + self._varying_form(mvals, T)
+        else:
+            MT = self._mt(mvals, T)
+            Mr = np.array([[MT[g][h] + dot(TL[h], MT[g][p:]) for g in range(p)] for h in range(p)])
+        rr = np.array([r0[h] + (0.0 if fl is None else dot(TL[h], fl)) for h in range(p)])
+        try:
+            qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
+        except np.linalg.LinAlgError as e:
+            raise ConstraintError(
+                "the projected mass matrix TᵀMT is singular: a coordinate without inertia on "
+                "the admissible motions"
+            ) from e
+        qdd = np.empty(n) if out is None else out
+        qdd[:p] = qG
+        _combine(qdd[p:], None if c is None else w, TL, qG)  # q̈_L = w - Z q̈_G
+        if not multipliers:
+            return qdd, None
+        res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
+        if fused:  # = (M_const T qG)_L + (M_varying q̈)_L - f_L, as q̈ = T qG here
+            _combine(res, None if fl is None else -fl, self.C[:, p:], qG)  # type: ignore[index]
+            self._varying_rows(mvals, qdd)
+        else:
+            _combine(res, None if fl is None else -fl, [m_[p:] for m_ in MT], qG)
+        return qdd, band.solve_t(res)
+
+    def _varying(self, mvals: list):
+        """(row, col, symmetric, values) of every state-dependent mass entry."""
+        for part, vals in zip(self.model._dyn, mvals, strict=True):
+            for (r, c, sym), val, const in zip(part.upper, vals, part.kernel.const, strict=False):
+                if const is None:
+                    yield r, c, sym, val
+
+    def _varying_form(self, mvals: list, T: np.ndarray) -> np.ndarray:
+        """Tᵀ M_varying T, (p, p), entry by entry without forming M T."""
+        p = len(T)
+        out = np.zeros((p, p))
+        tmp = self.model._scratch()
+        for r, c, sym, val in self._varying(mvals):
+            for h in range(p):
+                for g in range(h, p):
+                    x = dot3(val, take(r, T[h]), take(c, T[g]), tmp)
+                    if sym:
+                        x += x if g == h else dot3(val, take(c, T[h]), take(r, T[g]), tmp)
+                    out[h, g] += x
+                    if g != h:
+                        out[g, h] += x
+        return out
+
+    def _varying_rows(self, mvals: list, qdd: np.ndarray) -> None:
+        """self._v[p:] += (M_varying q̈)_L: entries whose row is an ordinary coordinate skipped."""
+        p, v, tmp = self.plan.p, self._v, self.model._scratch()
+        for r, c, sym, val in self._varying(mvals):
+            for row, col in ((r, c), (c, r)) if sym else ((r, c),):
+                if not (isinstance(row, Index) and row.fixed and row.start < p):
+                    add_product(v, row, val, take(col, qdd), tmp)
+
+    def _mt(self, mvals: list, T: np.ndarray) -> list[np.ndarray]:
+        """M T_g for every g (work buffers): M_const T from build time plus the varying part."""
+        model, MT = self.model, self._MT
+        if self.C is None:
+            for g in range(len(T)):
+                model.matvec(mvals, T[g], out=MT[g])
+            return MT
+        varying = [
+            [0.0 if c is not None else v for c, v in zip(part.kernel.const, vals, strict=False)]
+            for part, vals in zip(model._dyn, mvals, strict=True)
+        ]
+        for g in range(len(T)):
+            np.copyto(MT[g], self.C[g])
+            model.matvec(varying, T[g], out=MT[g], add=True)
+        return MT
+
+
+def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
+    """out = base + Σ_g coef_g vecs_g, in place."""
+    start = 0
+    if base is not None:
+        out[:] = base
+    elif len(coef):
+        scale(vecs[0], float(coef[0]), out)
+        start = 1
+    else:
+        out.fill(0.0)
+    for g in range(start, len(coef)):
+        axpy(float(coef[g]), vecs[g], out)
+
+
+class SparseSolver:
+    """SuperLU on the assembled augmented matrix, its column ordering reused across solves."""
+
+    name = "sparse"
+
+    def __init__(self, model) -> None:
+        self.model = model
+        n, m = model.n, model.m
+        N = n + m
+        rows, cols = [], []
+        for part in model._dyn:
+            for r, c in part.mass:
+                rows.append(_expand(r, c))
+                cols.append(_expand(c, r))
+        for part in model._con:
+            for c in part.cols:
+                rr = n + _expand(part.rows, c)
+                cc = _expand(c, part.rows)
+                rows += [rr, cc]
+                cols += [cc, rr]
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, np.int64)  # noqa: E731
+        lin = cat(cols) * N + cat(rows)
+        self.uniq, self.slot = np.unique(lin, return_inverse=True)
+        self.N = N
+        self.perm: np.ndarray | None = None
+        self._pattern(None)
+
+    def _pattern(self, perm: np.ndarray | None) -> None:
+        """CSC structure of K (or of K[:, perm]) and where each stored entry goes."""
+        N = self.N
+        col, row = self.uniq // N, self.uniq % N
+        if perm is not None:
+            inv = np.empty(N, dtype=np.int64)
+            inv[perm] = np.arange(N)
+            col = inv[col]
+        order = np.lexsort((row, col))
+        self.where = np.empty_like(order)
+        self.where[order] = np.arange(order.size)
+        self.indices = row[order]
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(col, minlength=N))])
+
+    def solve(
+        self,
+        mvals: list,
+        f: np.ndarray,
+        avals: list,
+        c: np.ndarray | None,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple:
+        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero); see TriangularSolver."""
+        model = self.model
+        data = []
+        for part, vals in zip(model._dyn, mvals, strict=True):
+            for (r, cc), v in zip(part.mass, part.mass_values(vals), strict=True):
+                data.append(np.broadcast_to(np.asarray(v, float), (_count(r, cc),)))
+        for part, vals in zip(model._con, avals, strict=True):
+            for cc, v in zip(part.cols, vals, strict=True):
+                d = np.broadcast_to(np.asarray(v, float), (_count(part.rows, cc),))
+                data += [d, d]
+        vals = np.bincount(self.slot, weights=np.concatenate(data), minlength=self.uniq.size)
+        packed = np.empty_like(vals)
+        packed[self.where] = vals
+        K = sps.csc_matrix((packed, self.indices, self.indptr), shape=(self.N, self.N))
+        rhs = np.concatenate([f, np.zeros(model.m) if c is None else c])
+        try:
+            if self.perm is None:
+                lu = spla.splu(K, permc_spec="COLAMD")
+                self.perm = lu.perm_c.copy()
+                self._pattern(self.perm)
+                sol = lu.solve(rhs)
+            else:
+                y = spla.splu(K, permc_spec="NATURAL").solve(rhs)
+                sol = np.empty_like(y)
+                sol[self.perm] = y
+        except RuntimeError as e:
+            raise ConstraintError(
+                "the augmented matrix [[M, Aᵀ], [A, 0]] is singular: redundant or inconsistent "
+                "constraints, or a coordinate without inertia"
+            ) from e
+        if not np.all(np.isfinite(sol)):
+            raise ConstraintError("the augmented matrix [[M, Aᵀ], [A, 0]] is singular")
+        qdd = sol[: model.n]
+        if out is not None:
+            out[:] = qdd
+            qdd = out
+        return qdd, -sol[model.n :] if multipliers else None
+
+
+def _count(a, b) -> int:
+    return max(
+        np.size(indices(a)) if not isinstance(a, Index) else a.count,
+        np.size(indices(b)) if not isinstance(b, Index) else b.count,
+    )
+
+
+def _expand(a, b) -> np.ndarray:
+    """Indices of ``a`` over the instances of a stream whose other index set is ``b``."""
+    return np.broadcast_to(indices(a), (_count(a, b),)).astype(np.int64)

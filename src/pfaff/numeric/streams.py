@@ -1,0 +1,353 @@
+"""Template kernels evaluated over index progressions, without per-instance index arrays.
+
+A family block's instance i uses global coordinate ``start + step*i`` for each local coordinate, so
+the kernel's inputs are strided *views* of q and q̇ (no gather) and its outputs scatter back with
+slice arithmetic. Outputs that do not depend on the state are evaluated once, at build time, to a
+number. Evaluation runs in chunks of instances so that the temporaries of the generated NumPy code
+stay in cache.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg.blas as blas
+
+from pfaff.numeric.trig import sincos, workspace
+
+CHUNK = 1 << 15  # instances per kernel call
+# NumPy releases the GIL inside ufunc loops: large kernels run their chunks on THREADS threads.
+THREADS = min(2, os.cpu_count() or 1)
+PARALLEL_FROM = 1 << 20
+# OpenBLAS runs level-1 calls (daxpy, ddot) below 10,000 elements on the calling thread; on longer
+# vectors it wakes its own threads, whose wake-up and spin-wait cost more than the call at 2^16
+# elements (a solve at N = 65536 took 16 ms instead of 2.7 ms) and compete with the kernel threads.
+BLAS_BLOCK = 8192
+SINCOS_FROM = 1 << 12  # kernels over this many instances take sin and cos from trig.sincos
+SPAN = 1 << 17  # elements per task of the streaming passes run on the threads (1 MiB)
+_POOL: ThreadPoolExecutor | None = None
+_THREAD = threading.local()
+
+
+def _pool() -> ThreadPoolExecutor:
+    global _POOL
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(THREADS - 1, thread_name_prefix="pfaff-kernel")
+    return _POOL
+
+
+def in_spans(count: int, step: int, fn: Callable[[int, int], None]) -> None:
+    """fn(lo, hi) over [0, count) in spans of ``step``: on THREADS threads from PARALLEL_FROM on.
+
+    Spans are handed out one at a time, so a thread slowed down (a busy core) takes fewer. ``fn``
+    must release the GIL for most of its time (NumPy ufuncs do) to gain from the threads.
+    """
+    nested = threading.current_thread().name.startswith("pfaff-kernel")  # never wait on itself
+    if count < PARALLEL_FROM or THREADS < 2 or nested:
+        for lo in range(0, count, step):
+            fn(lo, min(lo + step, count))
+        return
+    spans, last = itertools.count(), (count - 1) // step
+
+    def work() -> None:
+        while (i := next(spans)) <= last:  # next() on a count is atomic under the GIL
+            fn(i * step, min((i + 1) * step, count))
+
+    helpers = [_pool().submit(work) for _ in range(THREADS - 1)]
+    work()
+    for h in helpers:
+        h.result()
+
+
+def _span_scratch() -> np.ndarray:
+    """A SPAN-long scratch vector of the calling thread."""
+    buf = getattr(_THREAD, "span", None)
+    if buf is None:
+        buf = _THREAD.span = np.empty(SPAN)
+    return buf
+
+
+@dataclass(frozen=True)
+class Index:
+    """Global indices ``start + step*i`` for i < count (``step == 0``: one fixed index).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ix = Index(1, 2, 3)
+    >>> ix.take(np.arange(10.0)).tolist(), ix.indices().tolist()
+    ([1.0, 3.0, 5.0], [1, 3, 5])
+    """
+
+    start: int
+    step: int
+    count: int
+
+    @classmethod
+    def of(cls, idx: np.ndarray) -> Index | np.ndarray:
+        """The progression an index array is, or the array itself when it is none."""
+        idx = np.asarray(idx, dtype=np.int64)
+        if idx.size == 1:
+            return cls(int(idx[0]), 1, 1)
+        d = np.diff(idx)
+        if d.size and np.all(d == d[0]):
+            return cls(int(idx[0]), int(d[0]), idx.size)
+        return idx
+
+    @property
+    def fixed(self) -> bool:
+        """All instances use the same index."""
+        return self.step == 0
+
+    def slice(self, lo: int = 0, hi: int | None = None) -> slice:
+        """The slice of instances lo … hi-1 (not for fixed indices)."""
+        hi = self.count if hi is None else hi
+        a = self.start + self.step * lo
+        b = self.start + self.step * (hi - 1) + (1 if self.step > 0 else -1)
+        return slice(a, b if b >= 0 else None, self.step)
+
+    def take(self, x: np.ndarray, lo: int = 0, hi: int | None = None) -> np.ndarray | float:
+        """x at the indices of instances lo … hi-1: a view, or a scalar when fixed."""
+        return x[self.start] if self.fixed else x[self.slice(lo, hi)]
+
+    def indices(self) -> np.ndarray:
+        """The indices as an array, shape (count,)."""
+        return self.start + self.step * np.arange(self.count, dtype=np.int64)
+
+
+def take(ix: Index | np.ndarray, x: np.ndarray, lo: int = 0, hi: int | None = None):
+    """x at an index set (view, scalar or gather)."""
+    return ix.take(x, lo, hi) if isinstance(ix, Index) else x[ix[lo:hi]]
+
+
+def scatter_add(out: np.ndarray, ix: Index | np.ndarray, vals: np.ndarray | float) -> None:
+    """out[ix] += vals, summing over instances that share an index."""
+    if isinstance(ix, Index):
+        if ix.fixed:
+            out[ix.start] += np.sum(vals) if np.ndim(vals) else vals * ix.count
+        else:
+            out[ix.slice()] += vals
+    else:
+        np.add.at(out, ix, np.broadcast_to(vals, ix.shape))
+
+
+def indices(ix: Index | np.ndarray) -> np.ndarray:
+    """An index set as an array."""
+    return ix.indices() if isinstance(ix, Index) else ix
+
+
+def add_product(
+    out: np.ndarray,
+    row: Index | np.ndarray,
+    val: np.ndarray | float,
+    xv: np.ndarray | float,
+    tmp: np.ndarray,
+) -> None:
+    """out[row] += val * xv over the instances, with as few passes over memory as possible.
+
+    ``xv`` is x taken at the stream's columns (an array view or a scalar); ``tmp`` is scratch of
+    at least the stream's length.
+    """
+    if not isinstance(row, Index):
+        np.add.at(out, row, np.broadcast_to(np.multiply(val, xv), row.shape))
+    elif row.fixed:
+        out[row.start] += dot(val, xv) if np.ndim(val) or np.ndim(xv) else val * xv * row.count
+    else:
+        target = out[row.slice()]
+        if np.ndim(val) and np.ndim(xv):
+            t_ = tmp[: row.count]
+            np.multiply(val, xv, out=t_)
+            target += t_
+        elif np.ndim(val) or np.ndim(xv):
+            arr, s = (val, xv) if np.ndim(val) else (xv, val)
+            if target.flags.c_contiguous and arr.flags.c_contiguous and row.count > 1:
+                axpy(float(s), arr, target)  # in place, one pass
+            else:
+                target += np.multiply(arr, s)
+        else:
+            target += val * xv
+
+
+def dot(vals: np.ndarray | float, x: np.ndarray | float) -> float:
+    """Σ_i vals_i x_i, with scalars standing for constant arrays."""
+    if np.ndim(vals) and np.ndim(x):
+        n = np.shape(vals)[0]
+        return math.fsum(  # type: ignore[index]
+            float(np.dot(vals[lo : lo + BLAS_BLOCK], x[lo : lo + BLAS_BLOCK]))
+            for lo in range(0, n, BLAS_BLOCK)
+        )
+    if np.ndim(vals) or np.ndim(x):
+        arr, s = (vals, x) if np.ndim(vals) else (x, vals)
+        return float(np.sum(arr)) * float(s)  # type: ignore[arg-type]
+    return float(vals) * float(x)  # type: ignore[arg-type]
+
+
+def dot3(
+    vals: np.ndarray | float, a: np.ndarray | float, b: np.ndarray | float, tmp: np.ndarray
+) -> float:
+    """Σ_i vals_i a_i b_i, scalars standing for constant arrays; ``tmp``: scratch, as long."""
+    arrays = [x for x in (vals, a, b) if np.ndim(x)]
+    scale = math.prod(float(x) for x in (vals, a, b) if not np.ndim(x))  # type: ignore[arg-type]
+    if len(arrays) < 3:
+        if not arrays:
+            return scale
+        return scale * dot(*arrays) if len(arrays) == 2 else scale * float(np.sum(arrays[0]))
+    n = np.shape(vals)[0]
+    total = 0.0
+    for lo in range(0, n, BLAS_BLOCK):
+        t_ = tmp[: min(BLAS_BLOCK, n - lo)]
+        np.multiply(vals[lo : lo + BLAS_BLOCK], a[lo : lo + BLAS_BLOCK], out=t_)  # type: ignore[index]
+        total += float(np.dot(t_, b[lo : lo + BLAS_BLOCK]))  # type: ignore[index]
+    return total
+
+
+def axpy(a: float, x: np.ndarray, y: np.ndarray) -> None:
+    """y += a x in place (1-D, contiguous), one pass, in blocks (see :data:`BLAS_BLOCK`).
+
+    Long vectors go in spans over the threads, with ufuncs (SciPy's daxpy keeps the GIL).
+    """
+    n = y.shape[0]
+    if n >= PARALLEL_FROM and THREADS > 1:
+
+        def span(lo: int, hi: int) -> None:
+            t_ = _span_scratch()[: hi - lo]
+            np.multiply(x[lo:hi], a, out=t_)
+            np.add(y[lo:hi], t_, out=y[lo:hi])
+
+        in_spans(n, SPAN, span)
+        return
+    for lo in range(0, n, BLAS_BLOCK):
+        blas.daxpy(x[lo : lo + BLAS_BLOCK], y[lo : lo + BLAS_BLOCK], a=a)
+
+
+def scale(x: np.ndarray, a: float, out: np.ndarray) -> None:
+    """out = a x (1-D), in spans over the threads for long vectors."""
+    in_spans(out.shape[0], SPAN, lambda lo, hi: np.multiply(x[lo:hi], a, out=out[lo:hi]))
+
+
+@dataclass(frozen=True)
+class StreamCode:
+    """Generated code of one template's outputs, made by :func:`pfaff.derive.codegen.stream_code`.
+
+    Attributes
+    ----------
+    const : list of float or None
+        Per output: its value when it does not depend on the state, else None (a summed output:
+        the constant times the number of instances).
+    varying : list of int
+        The outputs that depend on the state, in the order ``fn`` returns them.
+    summed : list of bool
+        Per output: reduce it to its total over the instances.
+    fn : callable or None
+        ``fn(q_0.., q_{k-1}, qd_0.., qd_{k-1}, t, s_0, c_0, s_1, c_1, ...)``: the varying outputs,
+        given sin and cos of every angle of ``angles``; None when nothing varies.
+    angle_fn : callable or None
+        ``angle_fn(q.., qd.., t)``: the angles whose sin and cos ``fn`` takes; None for none.
+    angles : tuple
+        The angle expressions (for reports and tests).
+    """
+
+    const: list
+    varying: list
+    summed: list
+    fn: Callable | None
+    angle_fn: Callable | None
+    angles: tuple = ()
+
+
+class StreamKernel:
+    """Outputs of one template over all its instances; constants folded at build time.
+
+    Parameters
+    ----------
+    columns : list of Index or ndarray
+        Global coordinate indices of each local coordinate over the instances.
+    code : StreamCode
+        The generated functions (:func:`pfaff.derive.codegen.stream_code`). An output flagged
+        summed is returned as its total over the instances (a float) instead of an array: it is
+        reduced chunk by chunk while in cache and never stored (a force on an ordinary
+        coordinate, an energy).
+    count : int
+        Number of instances.
+
+    Attributes
+    ----------
+    const : list of float or None
+        Per output: its value when it does not depend on the state, else None (summed outputs:
+        the constant times ``count``).
+    """
+
+    def __init__(self, columns: list, code: StreamCode, count: int) -> None:
+        self.columns, self.count = columns, count
+        self.varying = list(code.varying)
+        self.const: list[float | None] = list(code.const)
+        self.angles = code.angles
+        self._fn, self._angle_fn = code.fn, code.angle_fn
+        # per varying output: its row in the stored outputs, or -1 - its row in the partial sums
+        self._slot, ns, nv = [], 0, 0
+        for i in self.varying:
+            flag = code.summed[i]
+            self._slot.append(-1 - ns if flag else nv)
+            ns, nv = ns + flag, nv + (not flag)
+        self._n_stored, self._n_summed = nv, ns
+        self._out: np.ndarray | None = None
+        self.chunk = CHUNK  # instances per call of the generated function
+        self._partial = np.zeros((ns, -(-count // CHUNK)))
+        self._local = threading.local()
+
+    def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
+        out, partial = self._out, self._partial
+        step = self.chunk
+        for lo in range(start, stop, step):
+            hi = min(lo + step, stop)
+            args = [take(c, q, lo, hi) for c in self.columns]
+            args += [take(c, qd, lo, hi) for c in self.columns]
+            trig = self._trig(args, t_, hi - lo) if self.angles else []
+            for j, r in zip(self._slot, self._fn(*args, t_, *trig), strict=True):
+                if j >= 0:
+                    out[j, lo:hi] = r  # type: ignore[index]
+                else:
+                    partial[-1 - j, lo // step] = np.sum(r) if np.ndim(r) else r * (hi - lo)
+
+    def _trig(self, args: list, t_: float, size: int) -> list:
+        """sin and cos of every angle over one chunk, sharing the argument reduction."""
+        buf = getattr(self._local, "buf", None)
+        if buf is None:
+            buf = self._local.buf = (np.empty((2 * len(self.angles), self.chunk)), workspace())
+        res = []
+        for i, a in enumerate(self._angle_fn(*args, t_)):
+            if np.ndim(a) == 0:
+                res += [math.sin(a), math.cos(a)]
+            else:
+                res += sincos(a, buf[0][2 * i, :size], buf[0][2 * i + 1, :size], buf[1])
+        return res
+
+    def warm(self) -> None:
+        """Allocate and touch the output buffers now (page faults at build time, not in a solve)."""
+        if self._fn is not None and self._out is None:
+            self._out = np.zeros((self._n_stored, self.count))
+            self._out.fill(0.0)
+
+    def __call__(self, t_: float, q: np.ndarray, qd: np.ndarray) -> list:
+        """Every output over the instances: a float (a constant per instance, or the total of a
+        summed output) or an array, shape (count,).
+
+        The arrays are buffers owned by the kernel, overwritten by the next call.
+        """
+        if self._fn is None:
+            return list(self.const)
+        if self._out is None:
+            self._out = np.empty((self._n_stored, self.count))
+        out = self._out
+        in_spans(self.count, self.chunk, lambda lo, hi: self._run(t_, q, qd, lo, hi))
+        res: list = list(self.const)
+        for j, i in zip(self._slot, self.varying, strict=True):
+            res[i] = out[j] if j >= 0 else math.fsum(self._partial[-1 - j])
+        return res

@@ -1,0 +1,469 @@
+"""The numeric model of a system with families: template kernels over index progressions, O(N) solves.
+
+Same contract as :class:`pfaff.NumericModel` (``accelerations``, ``constraint_residual``,
+``constraint_matrix``, ``mass_matrix``, ``forcing``, ``energy``, ``project``). M and A are never
+assembled for a solve: each template contributes *streams* of entries (a value per instance at
+global row ``start + step*i`` and column ``start' + step'*i``), applied with slice arithmetic.
+
+Kernels (:class:`pfaff.numeric.streams.StreamKernel`) evaluate each template over chunks of instances on
+two threads, take sin and cos of an angle together (:mod:`pfaff.numeric.trig`), and reduce outputs that
+only count summed (a force on an ordinary coordinate, energies) without storing them.
+
+Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.numeric.solvers`):
+
+``triangular``
+    The constraint Jacobian restricted to the family coordinates, A_L, is square and banded lower
+    triangular (the ring: no slip on θ_1, then θ_{k+1} - θ_k). Null-space elimination: the
+    constraints give q̈_L = w - Z q̈_G with w = -A_L⁻¹γ, Z = A_L⁻¹A_G, the p ordinary coordinates
+    obey the p×p projected equations TᵀMT q̈_G = Tᵀ(f - M[0; w]), T = [I; -Z], and the multipliers
+    follow from A_Lᵀλ = (M q̈ - f)_L by back-substitution, λ_N first: the seed's "step backwards".
+    O(N) time and memory, no fill; M may have any sparsity.
+``sparse``
+    Anything else: the augmented matrix assembled in CSC from a pattern fixed at build time and
+    factored by SuperLU with the fill-reducing column ordering (COLAMD) of the first
+    factorization reused for every later one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sps
+
+from pfaff.core.errors import ModelError, StateError
+from pfaff.core.lazy import LazySeq
+from pfaff.numeric.model import check_state
+from pfaff.numeric.solvers import SparseSolver, TriangularSolver, triangular_plan
+from pfaff.numeric.streams import Index, StreamKernel, add_product, indices, scatter_add, take
+
+
+class DynStreams:
+    """A dynamics block: mass entries (row, col) and forcing rows, as streams.
+
+    Parameters
+    ----------
+    kernel : StreamKernel
+        Outputs: the upper mass entries, then the forcing entries (summed where flagged).
+    upper : list of (rows, cols, mirrored)
+        Per upper mass entry (a <= b): its row and column streams and whether it also stands
+        for (col, row).
+    forcing : list of Index or ndarray
+        Row of each forcing entry.
+    energy_kernel : callable
+        ``energy_kernel(which)`` makes the summed kernel of ``[T, V]`` (``"energy"``) or of
+        ``[T, V, T₀, T₂]`` (``"energies"``), on first use.
+    """
+
+    def __init__(
+        self,
+        kernel: StreamKernel,
+        upper: list[tuple[Index | np.ndarray, Index | np.ndarray, bool]],
+        forcing: list[Index | np.ndarray],
+        energy_kernel: Callable[[str], StreamKernel],
+    ) -> None:
+        self.kernel, self.upper, self.forcing = kernel, upper, forcing
+        # a force on a fixed coordinate (x of the ring) only ever counts summed over the instances
+        self.summed = [isinstance(ix, Index) and ix.fixed for ix in forcing]
+        self.mass = [(r, c) for r, c, _ in upper] + [(c, r) for r, c, sym in upper if sym]
+        self._energy_kernel = energy_kernel
+        self._ekernel: StreamKernel | None = None
+        self._pkernel: StreamKernel | None = None
+
+    def mass_values(self, outs: list) -> list:
+        """Values of :attr:`mass` entries from the kernel outputs (mirrored entries repeated)."""
+        nu = len(self.upper)
+        return outs[:nu] + [v for (_, _, sym), v in zip(self.upper, outs, strict=False) if sym]
+
+    def energy(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
+        """(T, V) summed over the instances."""
+        if self._ekernel is None:
+            self._ekernel = self._energy_kernel("energy")
+        return tuple(self._ekernel(t, q, qd))  # type: ignore[return-value]
+
+    def energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, ...]:
+        """(T, V, T₀, T₂) summed over the instances: T₀ = T at q̇ = 0, T₂ its quadratic part."""
+        if self._pkernel is None:
+            self._pkernel = self._energy_kernel("energies")
+        return tuple(self._pkernel(t, q, qd))
+
+
+@dataclass
+class ConStreams:
+    """A constraint block: A entries over its rows, then b, bias (Ȧq̇ + ḃ) and f.
+
+    Attributes
+    ----------
+    rows : Index or ndarray
+        Constraint row of each instance.
+    cols : list of Index or ndarray
+        Column of each A entry.
+    acc : StreamKernel
+        Outputs ``[A entries..., bias]``.
+    res : StreamKernel
+        Outputs ``[A entries..., b, bias, f]``.
+    """
+
+    rows: Index | np.ndarray
+    cols: list
+    acc: StreamKernel
+    res: StreamKernel
+
+
+class StructuredModel:
+    """Compiled equations of motion of a system with families (see the module docstring).
+
+    Attributes
+    ----------
+    n, m : int
+    coordinate_names, multiplier_names, constraint_names : sequence of str
+        Made on demand (a family of 2^24 members has no list of names).
+    holonomic : ndarray of bool, shape (m,)
+    parameters : dict
+    solver : str
+        ``"triangular"`` or ``"sparse"``.
+    stats : dict
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> ring = pfaff.models.rolling_ring(1000, force=True, family=True)
+    >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
+    >>> q, qd = pfaff.models.ring_state(1000, radius=0.5, theta=0.3)
+    >>> qdd, lam = model.accelerations(0.0, q, qd)
+    >>> model.solver, round(float(qdd[1]), 12), round(float(lam[0]), 12)
+    ('triangular', 2.0, -1.0)
+    """
+
+    def __init__(
+        self,
+        n: int,
+        m: int,
+        dyn: list[DynStreams],
+        con: list[ConStreams],
+        *,
+        coordinate_names: Sequence[str],
+        constraint_names: Sequence[str],
+        holonomic: np.ndarray,
+        parameters: dict[str, float],
+        p: int,
+        solver: str | None = None,
+    ) -> None:
+        self.n, self.m = n, m
+        self.coordinate_names = coordinate_names
+        self.multiplier_names = LazySeq(
+            self.m,
+            lambda i: f"lambda{i + 1}",
+            lambda lo, hi: [f"lambda{i}" for i in range(lo + 1, hi + 1)],
+        )
+        self.constraint_names = constraint_names
+        self.holonomic = np.asarray(holonomic, dtype=bool).reshape(self.m)
+        self.parameters = dict(parameters)
+        self._dyn, self._con = dyn, con
+        self.p = p  # ordinary (non-family) coordinates, first in q
+        self.stats: dict = {"kkt_solves": 0}
+        self._tmp: np.ndarray | None = None
+        self._zero: np.ndarray | None = None
+        self.solver = "none"
+        if solver != "none":
+            plan = triangular_plan(self) if solver in (None, "triangular") else None
+            if solver == "triangular" and plan is None:
+                raise ModelError("the constraints have no square banded triangular structure")
+            self._solver = TriangularSolver(self, plan) if plan is not None else SparseSolver(self)
+            self.solver = self.stats["solver"] = self._solver.name
+            for part in self._dyn:
+                part.kernel.warm()
+            for part in self._con:
+                part.acc.warm()
+            self._scratch().fill(0.0)
+
+    def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
+        """True when A has the triangular structure with non-zero pivots at (t, q), which proves
+        rank m; False when it has no such structure (the rank must be found otherwise).
+
+        Raises :class:`pfaff.ConstraintError` on a zero pivot.
+        """
+        plan = triangular_plan(self)
+        if plan is None:
+            return False
+        avals, _ = self._accel_constraints(t, np.asarray(q, dtype=float), self._zeros())
+        TriangularSolver(self, plan).factor(avals)
+        return True
+
+    # ------------------------------------------------------------------ validation
+    def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
+        return check_state(t, q, qd, self.n)
+
+    # ------------------------------------------------------------------ raw evaluation
+    def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, np.ndarray]:
+        """Mass-entry values per block and the forcing vector Q - h."""
+        mvals, f = [], np.zeros(self.n)
+        for part in self._dyn:
+            outs = part.kernel(t, q, qd)
+            nm = len(part.upper)
+            mvals.append(outs[:nm])
+            for ix, v, total in zip(part.forcing, outs[nm:], part.summed, strict=True):
+                if total:
+                    f[ix.start] += v
+                else:
+                    scatter_add(f, ix, v)
+        return mvals, f
+
+    def _accel_constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, list]:
+        """A-entry values per block and bias (Ȧq̇ + ḃ) per block."""
+        avals, bias = [], []
+        for part in self._con:
+            outs = part.acc(t, q, qd)
+            avals.append(outs[:-1])
+            bias.append(outs[-1])
+        return avals, bias
+
+    def matvec(
+        self, mvals: list, v: np.ndarray, out: np.ndarray | None = None, add: bool = False
+    ) -> np.ndarray:
+        """M v from evaluated (upper-triangle) mass entries; ``add``: out += M v.
+
+        Entries given as the number 0 are skipped (see ``varying_mass``).
+        """
+        y = np.zeros(self.n) if out is None else out
+        if out is not None and not add:
+            y.fill(0.0)
+        tmp = self._scratch()
+        for part, vals in zip(self._dyn, mvals, strict=True):
+            for (r, c, sym), val in zip(part.upper, vals, strict=True):
+                if np.ndim(val) == 0 and val == 0:
+                    continue
+                add_product(y, r, val, take(c, v), tmp)
+                if sym:
+                    add_product(y, c, val, take(r, v), tmp)
+        return y
+
+    def _scratch(self) -> np.ndarray:
+        if self._tmp is None:
+            counts = [part.kernel.count for part in self._dyn] + [p.acc.count for p in self._con]
+            self._tmp = np.empty(max(counts, default=0))
+        return self._tmp
+
+    def a_matvec(self, avals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """A v from evaluated constraint entries."""
+        y = np.zeros(self.m) if out is None else out
+        for part, vals in zip(self._con, avals, strict=True):
+            for c, val in zip(part.cols, vals, strict=True):
+                scatter_add(y, part.rows, np.multiply(val, take(c, v)))
+        return y
+
+    def _rows_vector(self, per_block: list) -> np.ndarray:
+        out = np.zeros(self.m)
+        for part, v in zip(self._con, per_block, strict=True):
+            scatter_add(out, part.rows, v)
+        return out
+
+    # ------------------------------------------------------------------ public evaluation
+    def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
+        """Q - h, shape (n,)."""
+        return self._dynamics(*self._state(t, q, qd))[1]
+
+    def mass_matrix(self, t: float, q: object, qd: object | None = None) -> sps.csr_matrix:
+        """M(q, t) as a SciPy CSR matrix, shape (n, n)."""
+        t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
+        mvals, _ = self._dynamics(t, q, qd)
+        pairs = [rc for part in self._dyn for rc in part.mass]
+        vals = [v for part, vs in zip(self._dyn, mvals, strict=True) for v in part.mass_values(vs)]
+        return _coo(pairs, vals, (self.n, self.n)).tocsr()
+
+    def constraint_matrix(self, t: float, q: object) -> sps.csr_matrix:
+        """A(q, t) as a SciPy CSR matrix, shape (m, n)."""
+        t, q, qd = self._state(t, q, np.zeros(self.n))
+        avals, _ = self._accel_constraints(t, q, qd)
+        pairs = [(part.rows, c) for part in self._con for c in part.cols]
+        vals = [v for vs in avals for v in vs]
+        return _coo(pairs, vals, (self.m, self.n)).tocsr()
+
+    def _residuals(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        f, g = np.zeros(self.m), np.zeros(self.m)
+        tmp = self._scratch()
+        for part in self._con:
+            outs = part.res(t, q, qd)
+            na = len(part.cols)
+            for c, val in zip(part.cols, outs[:na], strict=True):
+                add_product(g, part.rows, val, take(c, qd), tmp)
+            for out, val in ((g, outs[na]), (f, outs[na + 2])):
+                if np.ndim(val) or val != 0.0:
+                    scatter_add(out, part.rows, val)
+        return f, g
+
+    def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
+        """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
+        return self._residuals(*self._state(t, q, qd))
+
+    def acceleration_residual(self, t: float, q: object, qd: object, qdd: object) -> np.ndarray:
+        """A q̈ + Ȧq̇ + ḃ, shape (m,): zero for accelerations that satisfy the constraints."""
+        t, q, qd = self._state(t, q, qd)
+        qdd = np.asarray(qdd, dtype=float)
+        avals, bias = self._accel_constraints(t, q, qd)
+        return self.a_matvec(avals, qdd) + self._rows_vector(bias)
+
+    def generalized_constraint_force(
+        self, t: float, q: object, qd: object, qdd: object
+    ) -> np.ndarray:
+        """M q̈ - (Q - h), shape (n,): the generalized constraint force Aᵀλ on a motion."""
+        t, q, qd = self._state(t, q, qd)
+        mvals, f = self._dynamics(t, q, qd)
+        return self.matvec(mvals, np.asarray(qdd, dtype=float)) - f
+
+    def constraint_force(self, t: float, q: object, lam: object) -> np.ndarray:
+        """Aᵀλ, shape (n,)."""
+        t, q, qd = self._state(t, q, np.zeros(self.n))
+        avals, _ = self._accel_constraints(t, q, qd)
+        lam = np.asarray(lam, dtype=float)
+        y, tmp = np.zeros(self.n), self._scratch()
+        for part, vals in zip(self._con, avals, strict=True):
+            for c, val in zip(part.cols, vals, strict=True):
+                add_product(y, c, val, take(part.rows, lam), tmp)
+        return y
+
+    def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
+        """Kinetic and potential energy (T, V)."""
+        t, q, qd = self._state(t, q, qd)
+        TV = [part.energy(t, q, qd) for part in self._dyn]
+        return float(sum(x for x, _ in TV)), float(sum(v for _, v in TV))
+
+    # ------------------------------------------------------------------ solves
+    def _solve_accelerations(
+        self,
+        t: float,
+        q: np.ndarray,
+        qd: np.ndarray,
+        alpha: float = 0.0,
+        beta: float = 0.0,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """q̈, λ with the constraint rows' right-hand side -(Ȧq̇ + ḃ) - 2αg - β²f (Baumgarte)."""
+        mvals, f = self._dynamics(t, q, qd)
+        avals, bias = self._accel_constraints(t, q, qd)
+        zero = all(np.ndim(b) == 0 and b == 0 for b in bias)
+        c = None if zero else -self._rows_vector(bias)
+        if alpha or beta:
+            fr, g = self._residuals(t, q, qd)
+            c = (np.zeros(self.m) if c is None else c) - 2 * alpha * g - beta**2 * fr
+        self.stats["kkt_solves"] += 1
+        return self._solver.solve(mvals, f, avals, c, out=out, multipliers=multipliers)
+
+    def _ode_function(self, alpha: float = 0.0, beta: float = 0.0):
+        """y' = [q̇, q̈] of y = [q, q̇] for the integrators: q̈ written in place, no λ."""
+        n = self.n
+
+        def fun(t: float, y: np.ndarray) -> np.ndarray:
+            out = np.empty(2 * n)
+            out[:n] = y[n:]
+            self._solve_accelerations(t, y[:n], y[n:], alpha, beta, out[n:], multipliers=False)
+            if not math.isfinite(float(np.sum(out[n:]))):  # q̈ was just written: still in cache
+                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+            return out
+
+        return fun
+
+    def evaluate_states(
+        self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """What a trajectory reports at k states: q̈, λ, f, g, T, V, T(q, 0, t) and T₂.
+
+        Parameters
+        ----------
+        t : ndarray, shape (k,)
+        q, qd : ndarray, shape (k, n)
+
+        Returns
+        -------
+        dict
+            ``qdd`` (k, n), ``multipliers`` (k, m), ``f`` and ``g`` (k, m), and (k,) arrays ``T``,
+            ``V``, ``T0`` = T(q, 0, t) and ``T2`` (the part of T quadratic in q̇). One kernel pass
+            per state for the energies (T, V, T₀ and T₂ together). ``f`` and ``g`` are views of
+            ``residual`` (k, 2, m), the layout of ``Trajectory.constraint_residual``, so that a
+            caller can keep it without a copy.
+        """
+        t = np.asarray(t, dtype=float)
+        k = len(t)
+        out = {"qdd": np.empty((k, self.n)), "multipliers": np.empty((k, self.m))}
+        out["residual"] = np.empty((k, 2, self.m))  # f and g below are views of it
+        out["f"], out["g"] = out["residual"][:, 0], out["residual"][:, 1]
+        out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
+        for i in range(k):
+            ti, qi, qdi = self._state(t[i], q[i], qd[i])
+            _, out["multipliers"][i] = self._solve_accelerations(ti, qi, qdi, out=out["qdd"][i])
+            out["f"][i], out["g"][i] = self._residuals(ti, qi, qdi)
+            for part in self._dyn:
+                for key, v in zip(("T", "V", "T0", "T2"), part.energies(ti, qi, qdi), strict=True):
+                    out[key][i] += v
+        return out
+
+    def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
+        """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.rolling_ring(4, force=True, family=True).equations().compile(
+        ...     {"M": 2, "r": 0.5, "F": 2})
+        >>> q, qd = pfaff.models.ring_state(4, radius=0.5, theta=1.0, theta_dot=3.0)
+        >>> qdd, lam = model.accelerations(0.0, q, qd)
+        >>> round(float(qdd[0]), 12), round(float(lam[0]), 12)  # ẍ = F/(2M), λ_1 = -F/2
+        (0.5, -1.0)
+        """
+        return self._solve_accelerations(*self._state(t, q, qd))
+
+    def project(
+        self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """Project (q, q̇) onto f(q,t) = 0 and A q̇ + b = 0 with mass-weighted minimum-norm steps.
+
+        Newton on the positions, Δq = -M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹f (the KKT solve with zero forcing), then
+        one such step on the velocities when |A q̇ + b| > tol (exact: the residual is linear in
+        q̇). Returns the new q, q̇ and the number of corrections: Newton steps, or 1 when only
+        the velocities moved; 0 means the state was returned unchanged.
+        """
+        t, q, qd = self._state(t, q, qd)
+        f, g = self._residuals(t, q, qd)  # f is 0 on the rows of velocity constraints
+        it = 0
+        while it < max_iter:
+            if np.max(np.abs(f), initial=0.0) <= tol:
+                break
+            q = q - self._step(t, q, qd, f)
+            it += 1
+            f, g = self._residuals(t, q, qd)
+        if np.max(np.abs(g), initial=0.0) > tol:
+            qd = qd - self._step(t, q, qd, g)
+            it = max(it, 1)
+        return q, qd, it
+
+    def _residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(f, A q̇ + b) without validating the state (for the projection and the integrators)."""
+        return self._residuals(t, q, qd)
+
+    def _step(self, t: float, q: np.ndarray, qd: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """Δ = M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹c: the mass-weighted least change with A Δ = c."""
+        mvals, _ = self._dynamics(t, q, qd)
+        avals, _ = self._accel_constraints(t, q, qd)
+        return self._solver.solve(mvals, self._zeros(), avals, c, multipliers=False)[0]
+
+    def _zeros(self) -> np.ndarray:
+        if self._zero is None:
+            self._zero = np.zeros(self.n)
+        return self._zero
+
+
+def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:
+    rows, cols, data = [], [], []
+    for (r, c), v in zip(pairs, vals, strict=True):
+        ri, ci = indices(r), indices(c)
+        n = max(np.size(ri), np.size(ci))
+        rows.append(np.broadcast_to(ri, (n,)))
+        cols.append(np.broadcast_to(ci, (n,)))
+        data.append(np.broadcast_to(np.asarray(v, dtype=float), (n,)))
+    cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0)  # noqa: E731
+    return sps.coo_matrix(
+        (cat(data), (cat(rows).astype(np.int64), cat(cols).astype(np.int64))), shape=shape
+    )

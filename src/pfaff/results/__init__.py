@@ -1,0 +1,1 @@
+"""Results: the Trajectory of a simulation, its figures and files, and the ring figure of the demo."""

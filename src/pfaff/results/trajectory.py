@@ -1,0 +1,236 @@
+"""The result of a simulation: states, multipliers, energies, residuals, statistics and status."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pfaff.core.errors import StateError
+from pfaff.core.files import atomic_path
+
+
+class Trajectory:
+    """A simulated motion of a constrained system.
+
+    Attributes
+    ----------
+    t : ndarray, shape (k,)
+        Reported times.
+    q, qd, qdd : ndarray, shape (k, n)
+        Coordinates, speeds and accelerations.
+    multipliers : ndarray, shape (k, m)
+        λ of M q̈ + h = Q + Aᵀλ (the constraint forces in generalized form).
+    kinetic, potential : ndarray, shape (k,)
+        T and V.
+    energy : ndarray, shape (k,)
+        T + V.
+    jacobi : ndarray, shape (k,)
+        Jacobi integral q̇·∂L/∂q̇ − L = T₂ − T₀ + V (equals the energy when T is quadratic in q̇).
+    constraint_residual : ndarray, shape (k, 2, m)
+        ``[:, 0]`` position level f(q, t) (0 for velocity constraints), ``[:, 1]`` velocity level
+        A q̇ + b.
+    stats : dict
+        ``steps``, ``nfev``, ``rejected``, ``projections``, ... of the run.
+    status : str
+        ``"success"``, ``"failed"`` or ``"interrupted"``; ``message`` says why.
+    method : str
+    coordinate_names, multiplier_names : list of str
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    >>> traj = pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0.0, 1.0))
+    >>> traj.status, bool(abs(traj.constraint_residual).max() < 1e-10)
+    ('success', True)
+    """
+
+    def __init__(self, **fields: Any) -> None:
+        self.t: np.ndarray = fields["t"]
+        self.q: np.ndarray = fields["q"]
+        self.qd: np.ndarray = fields["qd"]
+        self.qdd: np.ndarray = fields["qdd"]
+        self.multipliers: np.ndarray = fields["multipliers"]
+        self.kinetic: np.ndarray = fields["kinetic"]
+        self.potential: np.ndarray = fields["potential"]
+        self.jacobi: np.ndarray = fields["jacobi"]
+        self.constraint_residual: np.ndarray = fields["constraint_residual"]
+        self.stats: dict = fields["stats"]
+        self.status: str = fields["status"]
+        self.message: str = fields["message"]
+        self.method: str = fields["method"]
+        self.coordinate_names: list[str] = fields["coordinate_names"]
+        self.multiplier_names: list[str] = fields["multiplier_names"]
+        self.parameters: dict = fields.get("parameters", {})
+        self._projector = fields.get("projector")
+
+    # ------------------------------------------------------------------ derived quantities
+    @property
+    def energy(self) -> np.ndarray:
+        """T + V, shape (k,)."""
+        return self.kinetic + self.potential
+
+    @property
+    def success(self) -> bool:
+        """True when the run reached the end of its time span."""
+        return self.status == "success"
+
+    @property
+    def position_residual(self) -> np.ndarray:
+        """f(q, t), shape (k, m)."""
+        return self.constraint_residual[:, 0, :]
+
+    @property
+    def velocity_residual(self) -> np.ndarray:
+        """A q̇ + b, shape (k, m)."""
+        return self.constraint_residual[:, 1, :]
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __repr__(self) -> str:
+        span = f"t = {self.t[0]:g} … {self.t[-1]:g}" if len(self.t) else "empty"
+        return (
+            f"<Trajectory {self.method}: {len(self.t)} points, {span}, status {self.status!r}, "
+            f"max |residual| {np.abs(self.constraint_residual).max(initial=0):.2e}>"
+        )
+
+    # ------------------------------------------------------------------ interpolation
+    def at(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Coordinates and speeds at any time inside the run.
+
+        Quintic Hermite interpolation of the reported (q, q̇, q̈), then projection onto the
+        constraints (for projection and IDA runs).
+
+        Parameters
+        ----------
+        t : float or ndarray, shape (k,)
+
+        Returns
+        -------
+        q, qd : ndarray, shape (n,) or (k, n)
+        """
+        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        if len(self.t) < 2 or ts.min() < self.t[0] or ts.max() > self.t[-1]:
+            raise StateError(
+                f"`t` must lie inside the simulated span [{self.t[0]:g}, {self.t[-1]:g}]"
+            )
+        i = np.clip(np.searchsorted(self.t, ts, side="right") - 1, 0, len(self.t) - 2)
+        h = (self.t[i + 1] - self.t[i])[:, None]
+        s = (ts - self.t[i])[:, None] / h
+        q, qd = _hermite5(s, h, self.q[i], self.qd[i], self.qdd[i], *self._ends(i))
+        if self._projector is not None:
+            for k in range(len(ts)):
+                q[k], qd[k], _ = self._projector(float(ts[k]), q[k], qd[k])
+        return (q[0], qd[0]) if np.ndim(t) == 0 else (q, qd)
+
+    def _ends(self, i: np.ndarray) -> tuple:
+        return self.q[i + 1], self.qd[i + 1], self.qdd[i + 1]
+
+    __call__ = at
+
+    # ------------------------------------------------------------------ output
+    def _columns(self) -> dict[str, np.ndarray]:
+        cols: dict[str, np.ndarray] = {"t": self.t}
+        for j, name in enumerate(self.coordinate_names):
+            cols[name] = self.q[:, j]
+        for j, name in enumerate(self.coordinate_names):
+            cols[f"{name}_dot"] = self.qd[:, j]
+        for j, name in enumerate(self.coordinate_names):
+            cols[f"{name}_ddot"] = self.qdd[:, j]
+        for j, name in enumerate(self.multiplier_names):
+            cols[name] = self.multipliers[:, j]
+        cols.update(T=self.kinetic, V=self.potential, energy=self.energy, jacobi=self.jacobi)
+        for j, name in enumerate(self.multiplier_names):
+            cols[f"f_{name}"] = self.constraint_residual[:, 0, j]
+            cols[f"g_{name}"] = self.constraint_residual[:, 1, j]
+        return cols
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write one row per reported time (atomically: temp file, then rename)."""
+        cols = self._columns()
+        with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            w.writerows(np.column_stack(list(cols.values())).tolist())
+        return Path(path)
+
+    def to_xarray(self) -> Any:
+        """An :class:`xarray.Dataset` with dimensions ``time``, ``coordinate``, ``multiplier``."""
+        import xarray as xr
+
+        dims_q, dims_l = ("time", "coordinate"), ("time", "multiplier")
+        ds = xr.Dataset(
+            {
+                "q": (dims_q, self.q),
+                "qd": (dims_q, self.qd),
+                "qdd": (dims_q, self.qdd),
+                "multipliers": (dims_l, self.multipliers),
+                "kinetic": ("time", self.kinetic),
+                "potential": ("time", self.potential),
+                "energy": ("time", self.energy),
+                "jacobi": ("time", self.jacobi),
+                "constraint_residual": (("time", "level", "multiplier"), self.constraint_residual),
+            },
+            coords={
+                "time": self.t,
+                "coordinate": list(self.coordinate_names),
+                "multiplier": list(self.multiplier_names),
+                "level": ["position", "velocity"],
+            },
+            attrs={
+                "method": self.method,
+                "status": self.status,
+                "message": self.message,
+                **{f"stat_{k}": v for k, v in self.stats.items() if isinstance(v, int | float)},
+                **{f"parameter_{k}": float(v) for k, v in self.parameters.items()},
+            },
+        )
+        return ds
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        """Write :meth:`to_xarray` as netCDF (atomically)."""
+        ds = self.to_xarray()
+        with atomic_path(path) as tmp:
+            ds.to_netcdf(tmp, engine=_netcdf_engine())
+        return Path(path)
+
+    def plot(self, path: str | Path | None = None) -> Any:
+        """Coordinates, multipliers, energy error and residuals on one figure (saved if ``path``)."""
+        from pfaff.results.figures import plot_trajectory
+
+        return plot_trajectory(self, path)
+
+
+def _netcdf_engine() -> str:
+    for engine, module in (("netcdf4", "netCDF4"), ("h5netcdf", "h5netcdf")):
+        try:
+            __import__(module)
+            return engine
+        except ImportError:
+            continue
+    return "scipy"  # netCDF3, always available with SciPy
+
+
+def _hermite5(s, h, q0, v0, a0, q1, v1, a1) -> tuple[np.ndarray, np.ndarray]:
+    """Quintic Hermite interpolant matching q, q̇, q̈ at both ends, and its derivative."""
+    s2, s3 = s * s, s * s * s
+    s4, s5 = s3 * s, s3 * s2
+    h00 = 1 - 10 * s3 + 15 * s4 - 6 * s5
+    h10 = s - 6 * s3 + 8 * s4 - 3 * s5
+    h20 = 0.5 * (s2 - 3 * s3 + 3 * s4 - s5)
+    h01 = 10 * s3 - 15 * s4 + 6 * s5
+    h11 = -4 * s3 + 7 * s4 - 3 * s5
+    h21 = 0.5 * (s3 - 2 * s4 + s5)
+    q = h00 * q0 + h * h10 * v0 + h * h * h20 * a0 + h01 * q1 + h * h11 * v1 + h * h * h21 * a1
+    d00 = -30 * s2 + 60 * s3 - 30 * s4
+    d10 = 1 - 18 * s2 + 32 * s3 - 15 * s4
+    d20 = 0.5 * (2 * s - 9 * s2 + 12 * s3 - 5 * s4)
+    d01 = -d00
+    d11 = -12 * s2 + 28 * s3 - 15 * s4
+    d21 = 0.5 * (3 * s2 - 8 * s3 + 5 * s4)
+    qd = (d00 * q0 + d01 * q1) / h + d10 * v0 + d11 * v1 + h * (d20 * a0 + d21 * a1)
+    return q, qd
