@@ -7,6 +7,8 @@ derive from ``TypeError``, so either ``except`` clause catches them.
 
 from __future__ import annotations
 
+import types
+
 __all__ = [
     "ConstraintError",
     "ModelError",
@@ -52,3 +54,20 @@ class OptionError(StateError):
 
 class SimulationError(PfaffError, RuntimeError):
     """A simulation failed (raised by ``simulate(..., throw=True)``; otherwise a status)."""
+
+
+GENERATED_PREFIXES = ("<lambdifygenerated", "<pfaff.")
+
+
+def raised_in_generated_code(e: BaseException) -> bool:
+    """True when ``e`` was raised in code pfaff generated from the user's equations.
+
+    A ``ValueError`` or ``ArithmeticError`` there (``math.sqrt`` of a negative value, an overflow,
+    a division by zero) means the equations are not defined at that state: a failure to report.
+    Anywhere else it is a bug, to be raised as such.
+    """
+    tb: types.TracebackType | None = e.__traceback__
+    last = None
+    while tb is not None:
+        last, tb = tb, tb.tb_next
+    return last is not None and last.tb_frame.f_code.co_filename.startswith(GENERATED_PREFIXES)

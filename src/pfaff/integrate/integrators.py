@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45
 
-from pfaff.core.errors import PfaffError, StateError
+from pfaff.core.errors import OptionError, PfaffError
 from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
 from pfaff.integrate.projection import Projector
 from pfaff.numeric.kkt import RESCALE_BELOW
@@ -92,7 +92,7 @@ class _RKStepper:
     ) -> None:
         name = opts.get("integrator", "DOP853")
         if name not in RK_METHODS:
-            raise StateError(
+            raise OptionError(
                 f"`integrator` must be one of {', '.join(RK_METHODS)} (explicit Runge–Kutta, "
                 f"which can restart from a projected state); got {name!r}"
             )

@@ -15,7 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import PfaffError, SimulationError, StateError
+from pfaff.core.errors import (
+    OptionError,
+    PfaffError,
+    SimulationError,
+    StateError,
+    raised_in_generated_code,
+)
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.integrators import BaumgarteRK, ProjectedRK
 from pfaff.integrate.projection import Projector, residuals
@@ -28,12 +34,12 @@ def _span(t_span: object) -> tuple[float, float]:
     try:
         t0, t1 = (float(v) for v in t_span)  # type: ignore[union-attr]
     except (TypeError, ValueError):
-        raise StateError(f"`t_span` must be two numbers (t0, t_end); got {t_span!r}") from None
+        raise OptionError(f"`t_span` must be two numbers (t0, t_end); got {t_span!r}") from None
     if not (math.isfinite(t0) and math.isfinite(t1)):
-        raise StateError(f"`t_span` must be finite; got ({t0}, {t1})")
+        raise OptionError(f"`t_span` must be finite; got ({t0}, {t1})")
     if t1 <= t0:
         kind = "empty" if t1 == t0 else "reversed"
-        raise StateError(f"`t_span` is {kind}: t_end = {t1:g} must be greater than t0 = {t0:g}")
+        raise OptionError(f"`t_span` is {kind}: t_end = {t1:g} must be greater than t0 = {t0:g}")
     return t0, t1
 
 
@@ -43,29 +49,29 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
     try:
         te = np.asarray(t_eval, dtype=float).ravel()
     except (TypeError, ValueError):
-        raise StateError("`t_eval` must be an array of times") from None
+        raise OptionError("`t_eval` must be an array of times") from None
     if not np.isfinite(te).all():
-        raise StateError("`t_eval` contains NaN or infinity")
+        raise OptionError("`t_eval` contains NaN or infinity")
     if te.size == 0 or np.any(np.diff(te) <= 0):
-        raise StateError("`t_eval` must be non-empty and strictly increasing")
+        raise OptionError("`t_eval` must be non-empty and strictly increasing")
     if te[0] < t0 or te[-1] > t1:
-        raise StateError(f"`t_eval` must lie inside t_span [{t0:g}, {t1:g}]")
+        raise OptionError(f"`t_eval` must lie inside t_span [{t0:g}, {t1:g}]")
     return te
 
 
 def _options(method: str, kw: dict) -> dict:
     if method not in METHODS:
-        raise StateError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        raise OptionError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     for key in ("rtol", "atol", "alpha", "beta", "constraint_tol"):
         v = kw[key]
         if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
-            raise StateError(f"`{key}` must be a finite number >= 0; got {v!r}")
+            raise OptionError(f"`{key}` must be a finite number >= 0; got {v!r}")
     if kw.get("ida_jacobian") not in (None, "fd", "approximate"):
-        raise StateError(
+        raise OptionError(
             f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r}"
         )
     if kw["rtol"] <= 0 or kw["atol"] <= 0 or kw["constraint_tol"] <= 0:
-        raise StateError("`rtol`, `atol` and `constraint_tol` must be positive")
+        raise OptionError("`rtol`, `atol` and `constraint_tol` must be positive")
     return kw
 
 
@@ -263,9 +269,12 @@ class _Run:
                     bar.update(st.t - t_prev)
         except KeyboardInterrupt:
             status, message = "interrupted", f"interrupted by the user at t = {st.t:.17g}"
-        except (PfaffError, FloatingPointError, np.linalg.LinAlgError, ArithmeticError) as e:
+        except (PfaffError, FloatingPointError, np.linalg.LinAlgError) as e:
             status, message = "failed", f"failed at t = {st.t:.17g}: {e}"
-        except ValueError as e:  # a math domain error in compiled scalar code (sqrt of x < 0, ...)
+        except (ValueError, ArithmeticError) as e:
+            if not raised_in_generated_code(e):  # a bug in pfaff: surface it as one
+                raise
+            # a math domain error, overflow or division by zero in the user's equations
             status, message = (
                 "failed",
                 f"failed at t = {st.t:.17g}: the equations are not defined there ({e})",

@@ -277,7 +277,19 @@ def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
 
 
 class SparseSolver:
-    """SuperLU on the assembled augmented matrix, its column ordering reused across solves."""
+    """SuperLU on the assembled augmented matrix, its column ordering reused across solves.
+
+    The first solve orders the columns of K = [[M, Aᵀ], [A, 0]] by COLAMD; later solves store K
+    with its columns already in that order and factor it with the natural ordering.
+
+    Attributes
+    ----------
+    fill : int or None
+        Entries SuperLU stores for L and U of the last factorization (``SuperLU.nnz``: supernodal
+        storage, a little above ``L.nnz + U.nnz``, read without copying the factors); None before
+        the first solve. Also ``model.stats["fill"]``. The reused ordering keeps it at the first
+        factorization's, up to pivot ties that SuperLU breaks by row position.
+    """
 
     name = "sparse"
 
@@ -301,16 +313,19 @@ class SparseSolver:
         self.uniq, self.slot = np.unique(lin, return_inverse=True)
         self.N = N
         self.perm: np.ndarray | None = None
+        self.fill: int | None = None
         self._pattern(None)
 
     def _pattern(self, perm: np.ndarray | None) -> None:
-        """CSC structure of K (or of K[:, perm]) and where each stored entry goes."""
+        """CSC structure of K (or of K Pc) and where each stored entry goes.
+
+        ``perm`` is SuperLU's ``perm_c``: Pr K Pc = L U with Pc[i, perm[i]] = 1, so column i of K
+        is column perm[i] of K Pc (K Pc = K[:, argsort(perm)]).
+        """
         N = self.N
         col, row = self.uniq // N, self.uniq % N
         if perm is not None:
-            inv = np.empty(N, dtype=np.int64)
-            inv[perm] = np.arange(N)
-            col = inv[col]
+            col = perm[col]
         order = np.lexsort((row, col))
         self.where = np.empty_like(order)
         self.where[order] = np.arange(order.size)
@@ -348,9 +363,9 @@ class SparseSolver:
                 self._pattern(self.perm)
                 sol = lu.solve(rhs)
             else:
-                y = spla.splu(K, permc_spec="NATURAL").solve(rhs)
-                sol = np.empty_like(y)
-                sol[self.perm] = y
+                lu = spla.splu(K, permc_spec="NATURAL")  # K holds K Pc: x = Pc y, x_i = y[perm_i]
+                sol = lu.solve(rhs)[self.perm]
+            self.fill = model.stats["fill"] = int(lu.nnz)
         except RuntimeError as e:
             raise ConstraintError(
                 "the augmented matrix [[M, Aᵀ], [A, 0]] is singular: redundant or inconsistent "

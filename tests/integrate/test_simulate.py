@@ -69,6 +69,7 @@ Q0, QD0 = [LENGTH, 0.0], [0.0, 0.0]  # at rest, rod horizontal
 
 
 # ---------------------------------------------------------------------------------- 1. long runs
+@pytest.mark.slow
 def test_pendulum_100_periods_projection(pend: pfaff.NumericModel) -> None:
     """100 periods (≈ 237 s of motion) from horizontal: positions to 1e-7, |f| <= 1e-10."""
     te = np.linspace(0.0, 100 * PERIOD, 1001)
@@ -84,6 +85,7 @@ def test_pendulum_100_periods_projection(pend: pfaff.NumericModel) -> None:
     np.testing.assert_allclose(traj.q[-1], [LENGTH, 0.0], atol=1e-7)
 
 
+@pytest.mark.slow
 def test_pendulum_ida_few_periods(pend: pfaff.NumericModel) -> None:
     """IDA (BDF) over 5 periods only: 100 periods at this accuracy take ~30 s, too slow here."""
     te = np.linspace(0.0, 5 * PERIOD, 201)

@@ -67,6 +67,7 @@ def test_bad_arguments(args: list[str], capsys: pytest.CaptureFixture[str]) -> N
     assert "error" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_console_script_runs() -> None:
     res = subprocess.run(
         [sys.executable, "-m", "pfaff.cli", "demo", "ring", "--particles", "3", "--json"],

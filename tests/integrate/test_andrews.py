@@ -31,6 +31,8 @@ import sympy as sp
 
 import pfaff
 
+pytestmark = pytest.mark.slow  # the 7-body mechanism end to end: derivation and three runs
+
 t = pfaff.t
 NAMES = "beta Theta gamma Phi delta Omega epsilon"
 

@@ -154,6 +154,7 @@ def test_family_errors() -> None:
         s.add_particle(k, [th[k], 0], over=k)
 
 
+@pytest.mark.slow
 def test_memory_estimate_refuses_before_allocating() -> None:
     ring = pfaff.models.rolling_ring(2**31 - 2, force=True)
     with pytest.raises(pfaff.ModelError, match="GiB"):

@@ -121,3 +121,39 @@ def test_constraint_tol_must_be_positive() -> None:
     model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
     with pytest.raises(StateError, match="constraint_tol"):
         pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0.0, 1.0), constraint_tol=0.0)
+
+
+def test_bad_options_are_option_errors() -> None:
+    """Options get their own error class, still a StateError for older ``except`` clauses."""
+    model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    for kw in ({"method": "euler"}, {"rtol": -1.0}, {"t_eval": [0.5, 0.2]}):
+        with pytest.raises(pfaff.OptionError) as info:
+            pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0.0, 1.0), **kw)
+        assert isinstance(info.value, StateError)
+    with pytest.raises(pfaff.OptionError, match="t_span"):
+        pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (1.0, 0.0))
+
+
+def test_sqrt_of_negative_in_generated_code_is_a_failed_run() -> None:
+    """math.sqrt of a negative value inside the user's equations: status "failed" with the time."""
+    x = pfaff.coordinates("x")
+    s = pfaff.System([x])
+    s.add_kinetic_energy(x.diff(pfaff.t) ** 2 / 2)
+    s.add_generalized_force(x, -sp.sqrt(x))  # not defined once x < 0
+    model = s.equations().compile({})
+    traj = pfaff.simulate(model, [1.0], [0.0], (0.0, 5.0))
+    assert traj.status == "failed" and "t = " in traj.message
+
+
+def test_a_bug_surfaces_as_a_bug(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A ValueError raised by pfaff's own code during a run is not reported as a failed run."""
+    from pfaff.integrate import integrators
+
+    model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+
+    def broken(self: object) -> None:
+        raise ValueError("an internal bug")
+
+    monkeypatch.setattr(integrators.ProjectedRK, "step", broken)
+    with pytest.raises(ValueError, match="an internal bug"):
+        pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0.0, 1.0))
