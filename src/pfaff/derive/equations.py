@@ -68,44 +68,26 @@ def _placeholder_calls(loc: Local) -> list[sp.Expr]:
 
 
 class Derivation:
-    """Lagrange's equations with multipliers in block form.
+    """The equations of a system as derived blocks, with the named SymPy matrices made from them.
 
-    The canonical form is
+    M q̈ + h = Q + Aᵀλ with A q̈ + Ȧq̇ + ḃ = 0; the attributes (``mass_matrix``, ``forcing``,
+    ``constraint_matrix``, ``lagrange_equations``, ...) are documented on the user's class,
+    :class:`pfaff.EquationsOfMotion`, which is this one plus ``compile()``. Each matrix is assembled
+    from the per-template blocks the first time it is asked for.
 
-        M(q,t) q̈ + h(q,q̇,t) = Q(q,q̇,t) + A(q,t)ᵀ λ
-        A(q,t) q̈ + Ȧ q̇ + ḃ = 0            (differentiated Pfaffian constraints A q̇ + b = 0)
-
-    i.e. the augmented (KKT) system [[M, -Aᵀ], [A, 0]] [q̈; λ] = [Q - h; -(Ȧq̇ + ḃ)]. For a
-    holonomic constraint f(q,t) = 0, A = ∂f/∂q and b = ∂f/∂t, so Aᵀλ is the generalized constraint
-    force. Matrices are SymPy ``ImmutableMatrix`` (a read-only ``SparseMatrix`` beyond 500 coordinates)
-    in the user's coordinates (functions of :data:`pfaff.t`).
-
-    Attributes
+    Parameters
     ----------
-    coordinates : tuple of Function, length n
-    mass_matrix : Matrix, shape (n, n)
-        M.
-    velocity_terms : Matrix, shape (n, 1)
-        h: velocity products, explicit time dependence and ∂V/∂q.
-    generalized_forces : Matrix, shape (n, 1)
-        Q from applied forces (virtual work) and generalized forces.
-    forcing : Matrix, shape (n, 1)
-        Q - h.
-    constraint_matrix : Matrix, shape (m, n)
-        A.
-    constraint_bias : Matrix, shape (m, 1)
-        b.
-    acceleration_constraints : Matrix, shape (m, 1)
-        A q̈ + Ȧ q̇ + ḃ (each entry = 0).
-    multipliers : tuple of Symbol, length m
-        λ, one per constraint, in the order the constraints were added.
+    system : SystemSpec or None
+        The model the blocks come from (None for equations given as matrices: ``from_matrices``).
+    blocks : list of Block
 
     Examples
     --------
     >>> import pfaff
-    >>> eom = pfaff.models.cartesian_pendulum().equations()
-    >>> eom.lagrange_equations[1]
-    Eq(g*m + m*Derivative(y(t), (t, 2)), 2*lambda1*y(t))
+    >>> from pfaff.derive.templates import derive
+    >>> d = derive(pfaff.models.cartesian_pendulum())
+    >>> d.n, d.m, d.constraint_matrix
+    (2, 1, Matrix([[2*x(t), 2*y(t)]]))
     """
 
     def __init__(

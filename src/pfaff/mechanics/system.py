@@ -99,36 +99,18 @@ def _slot_name(system: SystemSpec, slot: int | Ref) -> str:
 class SystemSpec:
     """A constrained mechanical system as data: coordinates, pieces and their local forms.
 
-    This is the model stage. :class:`pfaff.System` (the user's façade, in :mod:`pfaff.api`) adds
-    the methods that call later stages (``equations()``, ``reduce()``, ``work()``).
-
-    The equations pfaff derives are Lagrange's equations with multipliers,
-
-        M(q,t) q̈ + h(q,q̇,t) = Q(q,q̇,t) + A(q,t)ᵀ λ,    A q̈ + Ȧ q̇ + ḃ = 0,
-
-    for constraints in Pfaffian form A(q,t) q̇ + b(q,t) = 0. A holonomic constraint f(q,t) = 0 enters
-    with A = ∂f/∂q and b = ∂f/∂t, so Aᵀλ is the generalized constraint force (sign convention).
-
-    Parameters
-    ----------
-    coordinates : sequence of Function, optional
-        Generalized coordinates q, each a function of :data:`pfaff.t`. Omit it when every
-        coordinate comes from :meth:`add_family`.
-    name : str, optional
-    frame : sympy.physics.vector.ReferenceFrame, optional
-        Inertial frame in which positions and forces given as ``Vector`` are resolved.
+    This is the model stage: every ``add_*`` method validates its piece when it is added. The
+    user's class :class:`pfaff.System` (in :mod:`pfaff.api`, where the parameters are documented)
+    adds the methods that call later stages (``equations()``, ``reduce()``, ``work()``).
 
     Examples
     --------
-    >>> import sympy as sp, pfaff
+    >>> import pfaff
     >>> x, y = pfaff.coordinates("x y")
-    >>> m, g, L = sp.symbols("m g L", positive=True)
-    >>> pend = pfaff.System([x, y])
-    >>> pend.add_particle(m, [x, y])
-    >>> pend.add_potential_energy(m * g * y)
-    >>> pend.add_holonomic_constraint(x**2 + y**2 - L**2, name="rod")
-    >>> pend.constraint_rows()[0]
-    ('rod',)
+    >>> spec = SystemSpec([x, y], name="point")
+    >>> spec.add_holonomic_constraint(x - y, name="diagonal")
+    >>> spec.n, spec.constraint_rows()[0]
+    (2, ('diagonal',))
     """
 
     def __init__(
