@@ -7,20 +7,33 @@ made by a user compares equal to them.
 
 from __future__ import annotations
 
+import keyword
+
 import numpy as np
 import sympy as sp
 
 from pfaff.api import System
-from pfaff.core.errors import ModelError
-from pfaff.core.symbols import coordinates
+from pfaff.core.errors import ModelError, ModelTypeError
+from pfaff.core.symbols import as_expr, coordinates
 
 FAMILY_FROM = 1024  # rolling_ring(n) uses the family form above this n unless told otherwise
 
 
-def _param(value: object, default: str) -> sp.Expr:
+def _param(value: object, default: str, arg: str) -> sp.Expr:
+    """A model parameter: the default symbol, a number or expression, or a plain name.
+
+    A string is a name (a new symbol) or it is refused: it is never parsed or evaluated.
+    """
     if value is None or value is True:
         return sp.Symbol(default)
-    return sp.sympify(value)
+    if isinstance(value, str):
+        if value.isidentifier() and not keyword.iskeyword(value):
+            return sp.Symbol(value)
+        raise ModelTypeError(
+            f"`{arg}` must be a number, a SymPy expression or a plain name; got the string "
+            f"{value!r} (a string is taken as a name, never evaluated)"
+        )
+    return as_expr(value, f"`{arg}`")
 
 
 def rolling_ring(
@@ -68,7 +81,7 @@ def rolling_ring(
     n = int(n)
     if family or (family is None and n > FAMILY_FROM):
         return _ring_family(n, mass, radius, force, incline, gravity)
-    M, r = _param(mass, "M"), _param(radius, "r")
+    M, r = _param(mass, "M", "mass"), _param(radius, "r", "radius")
     qs = coordinates(f"x theta1:{n + 1}")
     x, th = qs[0], qs[1:]
     ring = System(qs, name=f"rolling ring, N={n}")
@@ -83,9 +96,9 @@ def rolling_ring(
     for k in range(n - 1):
         ring.add_holonomic_constraint(th[k + 1] - th[k] - dth, name=f"spacing {k + 1}")
     if force is not None and force is not False:
-        ring.add_force([_param(force, "F"), 0], at=[x, 0], name="push")
+        ring.add_force([_param(force, "F", "force"), 0], at=[x, 0], name="push")
     if incline is not None and incline is not False:
-        a, g = _param(incline, "alpha"), _param(gravity, "g")
+        a, g = _param(incline, "alpha", "incline"), _param(gravity, "g", "gravity")
         for k in range(n):
             s_, h_ = x + r * sin[k], r * cos[k]
             ring.add_potential_energy(
@@ -98,7 +111,7 @@ def _ring_family(
     n: int, mass: object, radius: object, force: object, incline: object, gravity: object
 ) -> System:
     """:func:`rolling_ring` with θ_1 … θ_n as a family: the seed's ring in ten lines."""
-    M, r, k = _param(mass, "M"), _param(radius, "r"), sp.Symbol("k", integer=True)
+    M, r, k = _param(mass, "M", "mass"), _param(radius, "r", "radius"), sp.Symbol("k", integer=True)
     x = coordinates("x")
     ring = System([x], name=f"rolling ring, N={n}")
     th = ring.add_family("theta", n, first=1)
@@ -107,9 +120,9 @@ def _ring_family(
     ring.add_holonomic_constraint(x - r * th[1], name="no slip")
     ring.add_holonomic_constraint(th[k + 1] - th[k] - 2 * sp.pi / n, "spacing", over=(k, 1, n - 1))
     if force is not None and force is not False:
-        ring.add_force([_param(force, "F"), 0], at=[x, 0], name="push")
+        ring.add_force([_param(force, "F", "force"), 0], at=[x, 0], name="push")
     if incline is not None and incline is not False:
-        a, g = _param(incline, "alpha"), _param(gravity, "g")
+        a, g = _param(incline, "alpha", "incline"), _param(gravity, "g", "gravity")
         V = -(M / n) * g * (pos[0] * sp.sin(a) - pos[1] * sp.cos(a))
         ring.add_potential_energy(V, name="gravity", over=k)
     return ring
@@ -155,14 +168,14 @@ def rolling_ring_minimal(
     >>> pfaff.models.rolling_ring_minimal(force=True).equations().lagrange_equations[0]
     Eq(2*M*r**2*Derivative(theta(t), (t, 2)), F*r)
     """
-    M, r = _param(mass, "M"), _param(radius, "r")
+    M, r = _param(mass, "M", "mass"), _param(radius, "r", "radius")
     th = coordinates("theta")
     s = System([th], name="rolling ring, minimal")
     s.add_kinetic_energy(M * r**2 * th.diff() ** 2, name="T = I θ̇²")
     if force is not None and force is not False:
-        s.add_force([_param(force, "F"), 0], at=[r * th, 0], name="push")
+        s.add_force([_param(force, "F", "force"), 0], at=[r * th, 0], name="push")
     if incline is not None and incline is not False:
-        a, g = _param(incline, "alpha"), _param(gravity, "g")
+        a, g = _param(incline, "alpha", "incline"), _param(gravity, "g", "gravity")
         s.add_potential_energy(-M * g * r * th * sp.sin(a), name="gravity")
     return s
 
@@ -181,7 +194,7 @@ def cartesian_pendulum(
     >>> pfaff.models.cartesian_pendulum().equations().lagrange_equations[0]
     Eq(m*Derivative(x(t), (t, 2)), 2*lambda1*x(t))
     """
-    m, L, g = _param(mass, "m"), _param(length, "L"), _param(gravity, "g")
+    m, L, g = _param(mass, "m", "mass"), _param(length, "L", "length"), _param(gravity, "g", "gravity")
     x, y = coordinates("x y")
     s = System([x, y], name="Cartesian pendulum")
     s.add_particle(m, [x, y], name="bob")
@@ -199,7 +212,7 @@ def pendulum(*, mass: object = None, length: object = None, gravity: object = No
     >>> pfaff.models.pendulum().equations().lagrange_equations[0]
     Eq(L**2*m*Derivative(theta(t), (t, 2)) + L*g*m*sin(theta(t)), 0)
     """
-    m, L, g = _param(mass, "m"), _param(length, "L"), _param(gravity, "g")
+    m, L, g = _param(mass, "m", "mass"), _param(length, "L", "length"), _param(gravity, "g", "gravity")
     th = coordinates("theta")
     s = System([th], name="pendulum")
     pos = [L * sp.sin(th), -L * sp.cos(th)]

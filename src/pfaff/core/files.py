@@ -1,6 +1,8 @@
 """Atomic file output: write to a temporary file beside the target, then rename over it.
 
-A failure half-way leaves the user's existing file untouched and no partial file behind.
+A failure half-way leaves the user's existing file untouched and no partial file behind. A target
+that is a symbolic link is written through: the link's final target is replaced (in its own
+folder, so the rename stays atomic) and the link is kept. An existing file keeps its permissions.
 """
 
 from __future__ import annotations
@@ -26,18 +28,25 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     'hello'
     """
     target = Path(path)
+    if target.is_symlink():  # write where the link points, and keep the link
+        target = Path(os.path.realpath(target))
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
-        raise FileNotFoundError(f"cannot write `{target}`: folder `{folder}` does not exist")
+        raise FileNotFoundError(f"cannot write `{path}`: folder `{folder}` does not exist")
+    if target.is_dir():
+        raise IsADirectoryError(f"cannot write `{path}`: it is a folder")
+    mode = target.stat().st_mode & 0o7777 if target.exists() else None
     fd, tmp = tempfile.mkstemp(
         prefix=f".{target.name}.", suffix=suffix or target.suffix, dir=folder
     )
     os.close(fd)
     try:
         yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
+        if mode is None:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask  # mkstemp makes 0600; give a new file the usual permissions
+        os.chmod(tmp, mode)
         os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -44,7 +44,14 @@ def coordinates(names: str) -> sp.Function | tuple[sp.Function, ...]:
     if not isinstance(names, str):
         raise ModelTypeError(f"`names` must be a string such as 'x theta1:4', got {names!r}")
     made = dynamicsymbols(names)
-    return tuple(made) if isinstance(made, list | tuple) else made
+    out = tuple(made) if isinstance(made, list | tuple) else (made,)
+    bad = [str(f.func) for f in out if not str(f.func).isidentifier()]
+    if bad or not out:
+        raise ModelTypeError(
+            f"`names` must be plain names such as 'x theta1:4' (letters, digits, underscores), "
+            f"got {names!r}" + (f": {', '.join(map(repr, bad[:3]))} are not names" if bad else "")
+        )
+    return out if isinstance(made, list | tuple) else made
 
 
 def is_coordinate_like(obj: object) -> bool:
@@ -58,7 +65,16 @@ def validate_coordinates(coords: object) -> tuple[sp.Function, ...]:
         raise ModelTypeError(
             "`coordinates` must be functions of time, not a string: use pfaff.coordinates(names)"
         )
-    seq = (coords,) if isinstance(coords, sp.Basic) else tuple(coords)
+    if isinstance(coords, sp.Basic):
+        seq: tuple = (coords,)
+    else:
+        try:
+            seq = tuple(coords)  # type: ignore[arg-type]
+        except TypeError:
+            raise ModelTypeError(
+                f"`coordinates` must be a function of time or a sequence of them, got "
+                f"{type(coords).__name__} {coords!r}: make them with pfaff.coordinates('x y')"
+            ) from None
     problems = []
     if not seq:
         problems.append("a system needs at least one coordinate")
@@ -94,14 +110,14 @@ def as_expr(value: object, what: str) -> sp.Expr:
         raise ModelTypeError(f"{what} must be a number or SymPy expression, got {value!r}")
     if isinstance(value, sp.Basic):
         expr = value
-    elif isinstance(value, int | float | complex):
-        expr = sp.sympify(value)
+    elif isinstance(value, int | float):
+        expr = sp.Float(value) if isinstance(value, float) else sp.Integer(value)
     else:
         try:
             import numpy as np
 
-            if isinstance(value, np.generic):
-                expr = sp.sympify(value.item())
+            if isinstance(value, np.integer | np.floating):
+                expr = as_expr(value.item(), what)
             else:
                 raise TypeError
         except TypeError:
@@ -112,6 +128,8 @@ def as_expr(value: object, what: str) -> sp.Expr:
         raise ModelTypeError(f"{what} must be a scalar expression, got {expr!r}")
     if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ModelError(f"{what} contains NaN or infinity: {expr}")
+    if expr.has(sp.I):
+        raise ModelError(f"{what} must be real, got the complex {expr}")
     return expr
 
 

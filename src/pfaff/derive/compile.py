@@ -37,6 +37,8 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
     problems = []
     for key, val in given.items():
         sym = by_name.get(key) if isinstance(key, str) else key
+        if sym not in params and isinstance(key, sp.Symbol):
+            sym = by_name.get(key.name)  # the same name with other assumptions: the same parameter
         if sym not in params:
             problems.append(
                 f"unknown parameter `{key}` (the model's are: {', '.join(by_name) or 'none'})"
@@ -51,6 +53,9 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
         if p not in values:
             continue
         v = values[p]
+        if isinstance(v, str | bytes):
+            problems.append(f"parameter `{p}` must be a real number, got the string {v!r}")
+            continue
         try:
             fv = float(sp.sympify(v)) if isinstance(v, sp.Basic) else float(v)
         except (TypeError, ValueError):
