@@ -14,6 +14,7 @@ from pfaff import models
 from pfaff.api import EquationsOfMotion, Solution, System
 from pfaff.core.errors import (
     ConstraintError,
+    InertiaError,
     ModelError,
     ModelTypeError,
     OptionError,
@@ -33,6 +34,7 @@ __all__ = [
     "ConstraintError",
     "EquationsOfMotion",
     "ForceWork",
+    "InertiaError",
     "ModelError",
     "ModelTypeError",
     "NumericModel",

@@ -194,7 +194,11 @@ def cartesian_pendulum(
     >>> pfaff.models.cartesian_pendulum().equations().lagrange_equations[0]
     Eq(m*Derivative(x(t), (t, 2)), 2*lambda1*x(t))
     """
-    m, L, g = _param(mass, "m", "mass"), _param(length, "L", "length"), _param(gravity, "g", "gravity")
+    m, L, g = (
+        _param(mass, "m", "mass"),
+        _param(length, "L", "length"),
+        _param(gravity, "g", "gravity"),
+    )
     x, y = coordinates("x y")
     s = System([x, y], name="Cartesian pendulum")
     s.add_particle(m, [x, y], name="bob")
@@ -212,7 +216,11 @@ def pendulum(*, mass: object = None, length: object = None, gravity: object = No
     >>> pfaff.models.pendulum().equations().lagrange_equations[0]
     Eq(L**2*m*Derivative(theta(t), (t, 2)) + L*g*m*sin(theta(t)), 0)
     """
-    m, L, g = _param(mass, "m", "mass"), _param(length, "L", "length"), _param(gravity, "g", "gravity")
+    m, L, g = (
+        _param(mass, "m", "mass"),
+        _param(length, "L", "length"),
+        _param(gravity, "g", "gravity"),
+    )
     th = coordinates("theta")
     s = System([th], name="pendulum")
     pos = [L * sp.sin(th), -L * sp.cos(th)]

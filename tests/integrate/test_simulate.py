@@ -242,7 +242,10 @@ def short(pend: pfaff.NumericModel) -> pfaff.Trajectory:
     return pfaff.simulate(pend, Q0, QD0, (0.0, 1.0), t_eval=np.linspace(0.0, 1.0, 11))
 
 
-HEADER = "t x y x_dot y_dot x_ddot y_ddot lambda1 T V energy jacobi f_lambda1 g_lambda1".split()
+HEADER = (
+    "t x y x_dot y_dot x_ddot y_ddot lambda1 T V energy jacobi nc_work energy_balance "
+    "f_lambda1 g_lambda1"
+).split()
 
 
 def test_to_csv(short: pfaff.Trajectory, tmp_path) -> None:

@@ -3,16 +3,28 @@
 ``pfaff demo ring --particles N [--force F] [--json] [--plot FILE]`` derives and solves the seed's
 ring; ``--simulate --t-end T [--method M] [--output traj.nc|.csv]`` integrates it in time, as does
 ``pfaff demo pendulum --simulate`` for the Cartesian pendulum.
+
+Every outcome is one line on stderr and an exit code: 0 success, 2 a usage error or an error of
+the model, its values or a file (checked before any computation where possible), 3 a simulation
+that failed or was interrupted (its partial outputs written), 130 Ctrl-C before that, 1 anything
+unexpected (``--debug`` shows its traceback).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import traceback
 from collections.abc import Sequence
+from pathlib import Path
 
-from pfaff.core.errors import PfaffError
+from pfaff.core.errors import OptionError, PfaffError, raised_in_generated_code
+
+# the simulation options imply --simulate when given; these are their defaults
+SIMULATION_DEFAULTS = {"t_end": 2.0, "method": "projection", "rtol": 1e-9, "atol": 1e-11}
+OUTPUT_FORMATS = ("nc", "csv")
 
 
 def _positive_int(s: str) -> int:
@@ -50,10 +62,15 @@ def build_parser() -> argparse.ArgumentParser:
         prog="pfaff", description="Dynamics of constrained mechanical systems."
     )
     p.add_argument("--version", action="version", version=f"pfaff {__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
+    _debug_option(p, default=False)
+    p.set_defaults(show_help=p.print_help)
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
     demo = sub.add_parser("demo", help="run a built-in demonstration")
-    dsub = demo.add_subparsers(dest="demo", required=True)
+    demo.set_defaults(show_help=demo.print_help)
+    _debug_option(demo)
+    dsub = demo.add_subparsers(dest="demo", metavar="DEMO")
     ring = dsub.add_parser("ring", help="the seed's rolling ring of N particles")
+    _debug_option(ring)
     ring.add_argument(
         "--particles", "-N", type=_positive_int, default=6, help="number of particles (default 6)"
     )
@@ -67,10 +84,12 @@ def build_parser() -> argparse.ArgumentParser:
     ring.add_argument(
         "--plot",
         metavar="FILE.png",
-        help="write a figure of the ring and its multipliers (with --simulate: of the run)",
+        help="write a figure of the ring and its multipliers (with --simulate: of the run); "
+        "PNG, PDF, SVG, ... from the extension",
     )
     _simulation_options(ring)
     pend = dsub.add_parser("pendulum", help="the Cartesian pendulum (x, y) with its rod constraint")
+    _debug_option(pend)
     pend.add_argument("--mass", type=_positive, default=1.0, help="bob mass m (default 1)")
     pend.add_argument("--length", type=_positive, default=1.0, help="rod length L (default 1)")
     pend.add_argument("--gravity", type=_finite, default=9.81, help="g (default 9.81)")
@@ -78,41 +97,94 @@ def build_parser() -> argparse.ArgumentParser:
         "--angle", type=_finite, default=90.0, help="release angle from the vertical, degrees"
     )
     pend.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    pend.add_argument("--plot", metavar="FILE.png", help="write a figure of the run")
+    pend.add_argument(
+        "--plot", metavar="FILE.png", help="write a figure of the run (implies --simulate)"
+    )
     _simulation_options(pend)
     return p
+
+
+def _debug_option(p: argparse.ArgumentParser, default: object = argparse.SUPPRESS) -> None:
+    """``--debug`` anywhere on the command line (a subcommand's copy keeps the global value)."""
+    p.add_argument(
+        "--debug",
+        action="store_true",
+        default=default,
+        help="show the full traceback of an error",
+    )
 
 
 def _simulation_options(p: argparse.ArgumentParser) -> None:
     from pfaff.integrate.simulation import METHODS
 
-    g = p.add_argument_group("simulation")
+    g = p.add_argument_group("simulation (each option below implies --simulate)")
     g.add_argument("--simulate", action="store_true", help="integrate the motion in time")
-    g.add_argument("--t-end", type=_positive, default=2.0, help="end time (default 2)")
-    g.add_argument("--method", choices=list(METHODS), default="projection", help="integrator")
-    g.add_argument("--rtol", type=_positive, default=1e-9, help="relative tolerance")
-    g.add_argument("--atol", type=_positive, default=1e-11, help="absolute tolerance")
+    g.add_argument("--t-end", type=_positive, help="end time (default 2)")
+    g.add_argument("--method", choices=list(METHODS), help="integrator (default projection)")
+    g.add_argument("--rtol", type=_positive, help="relative tolerance (default 1e-9)")
+    g.add_argument("--atol", type=_positive, help="absolute tolerance (default 1e-11)")
     g.add_argument(
         "--output", metavar="FILE.nc|FILE.csv", help="write the trajectory (netCDF or CSV)"
     )
 
 
-def _write_outputs(traj, args: argparse.Namespace, rep: dict) -> None:
+def _resolve_simulation(args: argparse.Namespace) -> None:
+    """Turn on --simulate when an option that only a simulation uses was given; fill defaults."""
+    given = [k for k in (*SIMULATION_DEFAULTS, "output") if getattr(args, k) is not None]
+    if args.demo == "pendulum" and args.plot:  # the pendulum's only figure is of a run
+        given.append("plot")
+    args.simulate = args.simulate or bool(given)
+    for k, v in SIMULATION_DEFAULTS.items():
+        if getattr(args, k) is None:
+            setattr(args, k, v)
+
+
+def _check_file(flag: str, path: str, formats: Sequence[str], what: str) -> None:
+    """Refuse an output file before any computation: unknown extension, missing folder."""
+    suffix = Path(path).suffix.lstrip(".").lower()
+    if suffix not in formats:
+        ends = [f".{f}" for f in formats]
+        allowed = " or ".join(ends) if len(ends) <= 2 else f"a {what} format ({', '.join(ends)})"
+        raise OptionError(f"{flag} must end in {allowed}; got {path!r}")
+    folder = Path(path).parent
+    if not folder.is_dir():
+        raise OptionError(f"{flag} {path!r}: the folder {str(folder)!r} does not exist")
+    if Path(path).is_dir():
+        raise OptionError(f"{flag} {path!r} is a folder; give a file name")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OptionError(f"{flag} {path!r}: the folder {str(folder)!r} is not writable")
+
+
+def check_files(args: argparse.Namespace) -> None:
+    """Check --output and --plot before anything is derived or computed (OptionError)."""
+    if getattr(args, "output", None):
+        _check_file("--output", args.output, OUTPUT_FORMATS, "trajectory")
+    if getattr(args, "plot", None):
+        from pfaff.results.figures import figure_formats
+
+        _check_file("--plot", args.plot, figure_formats(), "figure")
+
+
+def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
     if args.output:
-        suffix = args.output.rsplit(".", 1)[-1].lower()
+        suffix = Path(args.output).suffix.lstrip(".").lower()
         (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
         rep["output"] = args.output
     if args.plot:
-        traj.plot(args.plot)
+        traj.plot(args.plot, units=units)
         rep["plot"] = args.plot
 
 
 def run_simulation(args: argparse.Namespace) -> int:
-    """Run ``pfaff demo ring|pendulum --simulate``."""
-    from pfaff.cli.simdemo import format_simulation, pendulum_simulation, ring_simulation
+    """Run ``pfaff demo ring|pendulum --simulate``: 0 on success, 3 when failed or interrupted
+    (what was computed is written and reported all the same)."""
+    from pfaff.cli.simdemo import (
+        format_simulation,
+        pendulum_simulation,
+        ring_simulation,
+        simulation_units,
+    )
 
-    if args.output and args.output.rsplit(".", 1)[-1].lower() not in ("nc", "csv"):
-        raise PfaffError(f"--output must end in .nc or .csv; got {args.output!r}")
     opts = {"t_end": args.t_end, "method": args.method, "rtol": args.rtol, "atol": args.atol}
     if args.demo == "ring":
         rep, traj = ring_simulation(
@@ -131,7 +203,7 @@ def run_simulation(args: argparse.Namespace) -> int:
             angle_deg=args.angle,
             opts=opts,
         )
-    _write_outputs(traj, args, rep)
+    _write_outputs(traj, args, rep, simulation_units(args.demo, traj))
     if args.json:
         print(json.dumps(rep, indent=1))
     else:
@@ -201,20 +273,73 @@ def run_pendulum(args: argparse.Namespace) -> int:
             print("  ", e)
         print(f"   constraint f = {rep['constraint']} = 0")
         print(f"At release ({args.angle:g}° from the vertical, at rest): q̈ = {rep['qdd']}")
-        print(f"   λ = {rep['multipliers'][0]:.12g}, rod tension −2Lλ = {rep['tension']:.12g}")
+        print(
+            f"   λ = {rep['multipliers'][0]:.12g}, rod tension −2Lλ = {rep['tension']:.12g}"
+            f"   (at rest: m g cos θ₀ = {rep['tension_exact']:.12g})"
+        )
         print("Add --simulate --t-end T to integrate the motion.")
     return 0
 
 
+def _one_line(text: str) -> str:
+    return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
+
+
+def _describe(e: BaseException) -> str:
+    """``Type: message`` of an exception, without an errno tuple: one line."""
+    args = e.args
+    if len(args) == 2 and isinstance(args[0], int) and isinstance(args[1], str):
+        msg = args[1]  # OverflowError(34, 'Numerical result out of range') from math
+    else:
+        msg = str(e)
+    return _one_line(f"{type(e).__name__}: {msg}" if msg else type(e).__name__)
+
+
+def _fail(message: str, code: int, debug: bool) -> int:
+    if debug:
+        traceback.print_exc()
+    print(f"pfaff: {message}", file=sys.stderr)
+    return code
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``pfaff`` console script."""
-    args = build_parser().parse_args(argv)
+    """Entry point of the ``pfaff`` console script.
+
+    Returns
+    -------
+    int
+        The exit code: 0 success (or help shown), 1 an unexpected error (one line; ``--debug``
+        shows the traceback), 2 a usage, model, value or file error, 3 a simulation that failed or
+        was interrupted, 130 interrupted (Ctrl-C) before a simulation.
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    debug = bool(getattr(args, "debug", False))
+    if args.command is None or args.demo is None:  # bare `pfaff` or `pfaff demo`: the help
+        args.show_help()
+        return 0
     try:
-        if args.command == "demo" and args.demo == "ring":
+        _resolve_simulation(args)
+        check_files(args)
+        if args.demo == "ring":
             return run_ring(args)
-        if args.command == "demo" and args.demo == "pendulum":
-            return run_simulation(args) if args.simulate else run_pendulum(args)
+        return run_simulation(args) if args.simulate else run_pendulum(args)
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130, debug)
     except (PfaffError, OSError) as e:
-        print(f"pfaff: error: {e}", file=sys.stderr)
-        return 2
-    return 1
+        return _fail(f"error: {_one_line(str(e))}", 2, debug)
+    except (ValueError, ArithmeticError) as e:
+        if not raised_in_generated_code(e):
+            return _fail(_unexpected(e), 1, debug)
+        # overflow, domain error or division by zero in the model's equations at these values
+        return _fail(
+            f"error: the equations cannot be evaluated with these values ({_describe(e)})",
+            2,
+            debug,
+        )
+    except Exception as e:
+        return _fail(_unexpected(e), 1, debug)
+
+
+def _unexpected(e: BaseException) -> str:
+    return f"unexpected error: {_describe(e)} (rerun with --debug for the traceback)"

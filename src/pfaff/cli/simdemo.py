@@ -10,11 +10,19 @@ import numpy as np
 
 from pfaff import models
 from pfaff.integrate.simulation import simulate
+from pfaff.results.figures import MAX_LINES
 from pfaff.results.trajectory import Trajectory
 
 
 def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
+    """The numbers every simulation demo reports.
+
+    ``energy_drift`` is the largest |T + V − E₀| (kept for compatibility: with applied forces it is
+    mostly their work); ``energy_balance_error`` the largest |T + V − E₀ − W_nc|, what an exact
+    motion keeps at 0; ``nc_work`` W_nc at the end.
+    """
     res = np.abs(traj.constraint_residual)
+    k = len(traj.t)
     return {
         "method": traj.method,
         "status": traj.status,
@@ -23,9 +31,13 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
         "t_end": float(traj.t[-1]) if len(traj.t) else None,
         "max_position_residual": float(res[:, 0].max(initial=0.0)),
         "max_velocity_residual": float(res[:, 1].max(initial=0.0)),
-        "energy_drift": float(np.abs(traj.energy - traj.energy[0]).max()) if len(traj.t) else None,
-        "stats": {
-            k: (int(v) if isinstance(v, int | np.integer) else v) for k, v in traj.stats.items()
+        "energy_drift": float(np.abs(traj.energy - traj.energy[0]).max()) if k else None,
+        "energy_balance_error": float(np.abs(traj.energy_balance).max()) if k else None,
+        "nc_work": float(traj.nc_work[-1]) if k else None,
+        "stats": {  # only the statistics this method keeps (IDA counts no rejected steps)
+            key: (int(v) if isinstance(v, int | np.integer) else v)
+            for key, v in traj.stats.items()
+            if v is not None
         },
         "wall_time_s": wall,
     }
@@ -66,10 +78,6 @@ def ring_simulation(
         friction_min=float(traj.multipliers[:, 0].min()),
         friction_max=float(traj.multipliers[:, 0].max()),
         friction_exact=-force / 2,
-        # the push does work F (x − x₀): T + V − E₀ must equal it
-        energy_balance_error=float(
-            np.abs(traj.energy - traj.energy[0] - force * (traj.q[:, 0] - q0[0])).max()
-        ),
     )
     return rep, traj
 
@@ -87,12 +95,39 @@ def pendulum_simulation(
     rep.update(
         system="cartesian pendulum",
         max_tension=float(tension.max()),
+        # T(θ) = m g (3 cos θ − 2 cos θ₀) peaks at the bottom: a reference only for a run that
+        # gets there (not when released upright, or stopped before the first swing is down)
         max_tension_exact=float(mass * gravity * (3 - 2 * math.cos(a)))
-        if angle_deg <= 180
+        if _passes_bottom(traj.q)
         else None,
         min_y=float(traj.q[:, 1].min()),
     )
     return rep, traj
+
+
+def _passes_bottom(q: np.ndarray) -> bool:
+    """True when the bob is at or passes through the bottom (x = 0, y < 0) during the run."""
+    x, y = q[:, 0], q[:, 1]
+    if len(x) == 0:
+        return False
+    if x[0] == 0 and y[0] < 0:  # released hanging: at the bottom throughout
+        return True
+    crossing = (x[:-1] * x[1:] <= 0) & ((y[:-1] < 0) | (y[1:] < 0))
+    return bool(np.any(crossing))
+
+
+def simulation_units(demo: str, traj: Trajectory, shown: int = MAX_LINES) -> dict[str, str]:
+    """SI units of a demo's coordinates and multipliers, for the first ``shown`` of each.
+
+    Ring: x in m, θ_k in rad; λ₁ (no slip x − r θ₁) in N, λ_k (spacing, in rad) in N m.
+    Pendulum: x, y in m; λ (f = x² + y² − L²) in N/m.
+    """
+    qn, ln = traj.coordinate_names[:shown], traj.multiplier_names[:shown]
+    if demo == "ring":
+        units = {name: ("m" if j == 0 else "rad") for j, name in enumerate(qn)}
+        units.update({name: ("N" if j == 0 else "N m") for j, name in enumerate(ln)})
+        return units
+    return {**dict.fromkeys(qn, "m"), **dict.fromkeys(ln, "N/m")}
 
 
 def format_simulation(rep: dict) -> str:
@@ -113,11 +148,25 @@ def format_simulation(rep: dict) -> str:
             f"  max rod tension {rep['max_tension']:.10g}"
             + (f"   m g (3 − 2 cos θ₀) = {exact:.10g}" if exact is not None else "")
         )
+    energy = ""
+    if rep["energy_balance_error"] is not None:
+        energy = f"   energy balance |T + V − E₀ − W| ≤ {rep['energy_balance_error']:.2e}"
+        if rep["nc_work"]:
+            energy += f" (W = work of the non-conservative forces = {rep['nc_work']:.6g})"
     lines.append(
-        f"  max |f| = {rep['max_position_residual']:.2e}   max |A q̇ + b| = {rep['max_velocity_residual']:.2e}   energy drift {rep['energy_drift']:.2e}"
+        f"  max |f| = {rep['max_position_residual']:.2e}   max |A q̇ + b| = {rep['max_velocity_residual']:.2e}"
+        + energy
     )
     s = rep["stats"]
-    lines.append(
-        f"  {s.get('steps')} steps, {s.get('nfev')} evaluations, {s.get('rejected')} rejected, {s.get('projections', 0)} projections, {rep['wall_time_s']:.3f} s"
-    )
+    counts = [f"{s[key]} {label}" for key, label in STAT_LABELS if isinstance(s.get(key), int)]
+    lines.append("  " + ", ".join([*counts, f"{rep['wall_time_s']:.3f} s"]))
     return "\n".join(lines)
+
+
+# the statistics of a run shown in the text, when the method keeps them
+STAT_LABELS = (
+    ("steps", "steps"),
+    ("nfev", "evaluations"),
+    ("rejected", "rejected"),
+    ("projections", "projections"),
+)

@@ -11,6 +11,7 @@ import types
 
 __all__ = [
     "ConstraintError",
+    "InertiaError",
     "ModelError",
     "ModelTypeError",
     "OptionError",
@@ -35,6 +36,15 @@ class ModelTypeError(ModelError, TypeError):
 
 class ConstraintError(PfaffError):
     """A constraint is malformed, not Pfaffian, redundant or inconsistent."""
+
+
+class InertiaError(ConstraintError):
+    """M is not positive definite on the admissible motions at a state.
+
+    Some acceleration is undetermined (a coordinate without inertia that no constraint fixes) or
+    the kinetic energy is negative along an admissible motion (a negative mass or inertia). The
+    message names the coordinates that span the offending direction.
+    """
 
 
 class ParameterError(PfaffError):
@@ -71,3 +81,25 @@ def raised_in_generated_code(e: BaseException) -> bool:
     while tb is not None:
         last, tb = tb, tb.tb_next
     return last is not None and last.tb_frame.f_code.co_filename.startswith(GENERATED_PREFIXES)
+
+
+def undefined_at(e: BaseException, t: float) -> StateError:
+    """The :class:`StateError` for ``e``, raised in generated code evaluated at time ``t``.
+
+    Examples
+    --------
+    >>> str(undefined_at(OverflowError(34, "Numerical result out of range"), 0.5))
+    'the equations are not defined at t = 0.5: a value overflowed the floating-point range (OverflowError: Numerical result out of range)'
+    """
+    if isinstance(e, OverflowError):
+        what = "a value overflowed the floating-point range"
+    elif isinstance(e, ZeroDivisionError):
+        what = "a division by zero"
+    elif isinstance(e, ValueError):
+        what = "a math domain error (the square root or logarithm of a negative value?)"
+    else:
+        what = "an arithmetic error"
+    detail = e.args[-1] if len(e.args) == 2 and isinstance(e.args[0], int) else e  # (errno, text)
+    return StateError(
+        f"the equations are not defined at t = {t:.17g}: {what} ({type(e).__name__}: {detail})"
+    )

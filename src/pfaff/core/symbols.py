@@ -7,6 +7,7 @@ handed to pfaff unchanged.
 
 from __future__ import annotations
 
+import re
 from functools import cache
 
 import sympy as sp
@@ -17,6 +18,9 @@ from pfaff.core.errors import ModelError, ModelTypeError
 
 t: sp.Symbol = dynamicsymbols._t
 """The time symbol, identical to ``sympy.physics.vector.dynamicsymbols._t``."""
+
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(:[0-9]+)?")  # a name, or a range name1:N
 
 
 def coordinates(names: str) -> sp.Function | tuple[sp.Function, ...]:
@@ -43,15 +47,21 @@ def coordinates(names: str) -> sp.Function | tuple[sp.Function, ...]:
     """
     if not isinstance(names, str):
         raise ModelTypeError(f"`names` must be a string such as 'x theta1:4', got {names!r}")
-    made = dynamicsymbols(names)
-    out = tuple(made) if isinstance(made, list | tuple) else (made,)
-    bad = [str(f.func) for f in out if not str(f.func).isidentifier()]
-    if bad or not out:
+    tokens = [tok for tok in re.split(r"[\s,]+", names) if tok]
+    bad = [tok for tok in tokens if not _NAME.fullmatch(tok)]
+    if bad or not tokens:
         raise ModelTypeError(
-            f"`names` must be plain names such as 'x theta1:4' (letters, digits, underscores), "
-            f"got {names!r}" + (f": {', '.join(map(repr, bad[:3]))} are not names" if bad else "")
+            "`names` must be plain names such as 'x theta1:4' (letters, digits and underscores, "
+            f"a range as name1:N), got {names[:80]!r}"
+            + (f": {', '.join(repr(b[:40]) for b in bad[:3])} not a name" if bad else "")
         )
-    return out if isinstance(made, list | tuple) else made
+    try:
+        made = dynamicsymbols(names)
+    except ValueError as e:  # an empty range such as 'x5:3'
+        raise ModelTypeError(f"`names`: {names!r} is not a valid range of names ({e})") from None
+    if isinstance(made, list | tuple) and not made:
+        raise ModelTypeError(f"`names`: {names!r} makes no coordinate (an empty range)")
+    return tuple(made) if isinstance(made, list | tuple) else made
 
 
 def is_coordinate_like(obj: object) -> bool:

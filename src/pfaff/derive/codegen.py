@@ -50,6 +50,21 @@ def energy_exprs(block: Block) -> list[sp.Expr]:
     return [block.local.kinetic, block.local.potential]
 
 
+def power_exprs(block: Block) -> list[sp.Expr]:
+    """[Σ_a Q_a q̇_a]: the power of a template's applied forces; [] when it has none.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> from pfaff.derive.templates import group
+    >>> s = pfaff.models.rolling_ring(3, force=True)
+    >>> [power_exprs(b) for b in group(s) if b.local.Q]
+    [[F*_qd0]]
+    """
+    Q = block.local.Q
+    return [sp.Add(*(e * local_qd(a) for a, e in sorted(Q.items())))] if Q else []
+
+
 def stream_code(
     k: int,
     exprs: Sequence[sp.Expr],

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -17,6 +18,7 @@ from pfaff.derive.codegen import (
     dynamics_layout,
     energy_exprs,
     make_kernel,
+    power_exprs,
 )
 from pfaff.derive.fused import build_fused
 from pfaff.numeric.fused import FusedKernel
@@ -56,10 +58,17 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
         if isinstance(v, str | bytes):
             problems.append(f"parameter `{p}` must be a real number, got the string {v!r}")
             continue
+        if isinstance(v, bool | np.bool_):  # float(True) is 1.0: a slip, not a value
+            problems.append(f"parameter `{p}` must be a real number, got the boolean {v!r}")
+            continue
+        if isinstance(v, complex | np.complexfloating) or np.ndim(v) != 0:
+            # float() of a NumPy complex drops the imaginary part; of a 1-element array, the array
+            problems.append(f"parameter `{p}` must be a real number, got {v!r:.80}")
+            continue
         try:
             fv = float(sp.sympify(v)) if isinstance(v, sp.Basic) else float(v)
         except (TypeError, ValueError):
-            problems.append(f"parameter `{p}` must be a real number, got {v!r}")
+            problems.append(f"parameter `{p}` must be a real number, got {v!r:.80}")
             continue
         if not math.isfinite(fv):
             problems.append(f"parameter `{p}` is {fv} (NaN or infinite)")
@@ -67,6 +76,50 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
     if problems:
         raise ParameterError("bad parameters: " + "; ".join(problems))
     return out
+
+
+def check_masses(eom: Derivation, values: Sequence[float]) -> None:
+    """Refuse particle masses that are not positive with these parameter values.
+
+    ``add_particle`` checks a numeric mass; a mass given by parameters (``m``, ``rho*V``) is
+    known only here. Each distinct mass expression is evaluated once (a ring of N particles of
+    mass M/N: one evaluation). Negative inertia from kinetic-energy terms is caught by the
+    inertia check at the first state (``check_determined``).
+    """
+    system = getattr(eom, "system", None)
+    if system is None:  # equations given as matrices: no particles
+        return
+    subs = dict(zip(eom.parameters, (sp.Float(v) for v in values), strict=True))
+    first: dict[sp.Expr, str] = {}
+    for piece in system.pieces:
+        if piece.kind == "particle" and not piece.exprs[0].is_number:
+            first.setdefault(piece.exprs[0], piece.name)
+    problems = []
+    for mass, name in first.items():
+        try:
+            value = complex(mass.xreplace(subs))
+        except (TypeError, ValueError):  # zoo, nan: not a number at all
+            value = complex(math.nan)
+        if value.imag == 0 and math.isfinite(value.real) and value.real > 0:
+            continue
+        given = ", ".join(
+            f"`{s.name}` = {float(subs[s]):g}"
+            for s in sorted(mass.free_symbols, key=lambda s: s.name)
+            if s in subs
+        )
+        shown = f"{value.real:g}" if value.imag == 0 else f"{value:g}"
+        problems.append(f"particle `{name}` has mass {mass} = {shown} with parameter {given}")
+    if problems:
+        raise ParameterError(
+            "particle masses must be positive (finite and real): " + "; ".join(problems)
+        )
+
+
+def model_parameter_values(eom: Derivation, given: dict) -> list[float]:
+    """:func:`parameter_values` of ``eom``'s parameters, with the particle masses they give checked."""
+    values = parameter_values(tuple(eom.parameters), given)
+    check_masses(eom, values)
+    return values
 
 
 def _cached(block: Block, what: str, params: tuple, build) -> Kernel:
@@ -88,7 +141,13 @@ def dynamics_part(block: Block, params: tuple) -> DynamicsPart:
     mr = np.array([c[:, a] for a, _ in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
     mc = np.array([c[:, b] for _, b in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
     fr = np.array([c[:, a] for a in fidx], dtype=np.int64).reshape(len(fidx), c.shape[0])
-    return DynamicsPart(kern, mr, mc, fr, energy)
+    pexprs = power_exprs(block)
+    power = (
+        _cached(block, "power", params, lambda: make_kernel(block, pexprs, params))
+        if pexprs
+        else None
+    )
+    return DynamicsPart(kern, mr, mc, fr, energy, power)
 
 
 def constraint_part(block: Block, params: tuple) -> ConstraintPart:
@@ -163,4 +222,4 @@ def _rhs_agrees(fused: FusedKernel, model: NumericModel, t0: float, q, qd) -> bo
 
 def compile_equations(eom: Derivation, parameters: dict) -> NumericModel:
     """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
-    return build_model(eom, parameter_values(tuple(eom.parameters), parameters))
+    return build_model(eom, model_parameter_values(eom, parameters))

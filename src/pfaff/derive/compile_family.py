@@ -15,8 +15,8 @@ import sympy as sp
 from pfaff.core.lazy import LazySeq
 from pfaff.core.symbols import local_qd
 from pfaff.derive.blocks import Block
-from pfaff.derive.codegen import constraint_layout, energy_exprs, stream_code
-from pfaff.derive.compile import parameter_values
+from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
+from pfaff.derive.compile import model_parameter_values
 from pfaff.derive.equations import Derivation
 from pfaff.derive.memory import check_memory
 from pfaff.numeric.streams import Index, StreamKernel
@@ -50,7 +50,7 @@ def dyn_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[floa
 
     def energy_kernel(which: str) -> StreamKernel:
         T, V = energy_exprs(block)
-        parts = [T, V]
+        parts = power_exprs(block) if which == "power" else [T, V]
         if which == "energies":
             k = len(cols)
             T0 = T.xreplace({local_qd(a): 0 for a in range(k)})
@@ -59,7 +59,7 @@ def dyn_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[floa
         return _kernel(cols, parts, params, values, block.n_inst, [True] * len(parts))
 
     upper_streams = [(cols[a], cols[b], a != b) for a, b in upper]
-    return DynStreams(kernel, upper_streams, rows, energy_kernel)
+    return DynStreams(kernel, upper_streams, rows, energy_kernel, has_power=bool(loc.Q))
 
 
 def con_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[float]) -> ConStreams:
@@ -136,5 +136,5 @@ def compile_structured(
     >>> compile_structured(eom, {"M": 1, "r": 0.5, "F": 2}).solver
     'triangular'
     """
-    check_memory(eom)
-    return structured_model(eom, parameter_values(tuple(eom.parameters), parameters), solver=solver)
+    check_memory(eom.n, eom.m, eom.blocks)
+    return structured_model(eom, model_parameter_values(eom, parameters), solver=solver)

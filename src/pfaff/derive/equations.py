@@ -67,6 +67,31 @@ def _placeholder_calls(loc: Local) -> list[sp.Expr]:
     return cached
 
 
+class EquationList(list[sp.Equality]):
+    """A list of :class:`sympy.Eq` that Jupyter renders as aligned LaTeX (dots for rates).
+
+    Equal to the plain list of the same equations; indexing and slicing work as on a list.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x")
+    >>> eqs = EquationList([sp.Eq(x, 1)])
+    >>> eqs == [sp.Eq(x, 1)]
+    True
+    >>> print(eqs._repr_latex_())
+    $\\begin{aligned} x &= 1 \\end{aligned}$
+    """
+
+    MAX_SHOWN = 20  # equations rendered; a longer list ends in a vertical ellipsis
+
+    def _repr_latex_(self) -> str:
+        rows = [f"{vlatex(e.lhs)} &= {vlatex(e.rhs)}" for e in self[: self.MAX_SHOWN]]
+        if len(self) > self.MAX_SHOWN:
+            rows.append(rf"&\vdots \quad \text{{({len(self) - self.MAX_SHOWN} more)}}")
+        return "$\\begin{aligned} " + r" \\ ".join(rows) + " \\end{aligned}$"
+
+
 class Derivation:
     """The equations of a system as derived blocks, with the named SymPy matrices made from them.
 
@@ -290,18 +315,21 @@ class Derivation:
         return self._energy("potential")
 
     @cached_property
-    def lagrange_equations(self) -> list[sp.Equality]:
-        """One ``Eq(M q̈ + h, Q + Aᵀλ)`` per coordinate."""
+    def lagrange_equations(self) -> EquationList:
+        """One ``Eq(M q̈ + h, Q + Aᵀλ)`` per coordinate.
+
+        A list of :class:`sympy.Eq` (equal to the plain list) that Jupyter shows as LaTeX.
+        """
         lhs: list[list] = [[] for _ in range(self.n)]
         rhs: list[list] = [[q] for q in self._Q_list]
         for (i, j), e in self._mass_entries.items():
             lhs[i].append(e * self.accels[j])
         for (i, j), e in self._constraint_entries["A"].items():
             rhs[j].append(e * self.multipliers[i])
-        return [
+        return EquationList(
             sp.Eq(sp.Add(*lhs[j], self._h_list[j]), sp.Add(*rhs[j]), evaluate=False)
             for j in range(self.n)
-        ]
+        )
 
     # ------------------------------------------------------------------ output
     def latex(self, max_equations: int = 12) -> str:

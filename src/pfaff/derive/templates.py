@@ -175,8 +175,9 @@ def derive(system: SystemSpec) -> Derivation:
     """Derive the equations of motion of ``system`` and check its constraints for redundancy."""
     if system.n == 0:
         raise ModelError("a system needs at least one coordinate (ordinary or in a family)")
-    eom = Derivation(system, group(system))
-    if eom.family:
-        check_memory(eom)
+    blocks = group(system)  # a family block is its template and index progressions: O(1)
+    # before anything of size n: the Derivation's constraint names and flags are per row
+    check_memory(system.n, system.n_constraints, blocks)
+    eom = Derivation(system, blocks)
     check_constraint_rank(eom)
     return eom

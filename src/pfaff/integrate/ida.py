@@ -18,12 +18,14 @@ that it stays invertible where a linkage folds flat and A loses rank.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from pfaff.core.errors import PfaffError
 from pfaff.integrate.projection import diagonal_weights
+from pfaff.integrate.work import hermite_work
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 REGULARIZATION = 1e-8  # ε / (max diag A M⁻¹Aᵀ / cj) on the algebraic diagonal
@@ -155,11 +157,32 @@ class IDAStepper:
         y = self._last.y
         return y[: self.n].copy(), y[self.n : 2 * self.n].copy()
 
+    def endpoints(self) -> tuple[tuple[float, np.ndarray, np.ndarray], ...]:
+        """(t, y, ẏ) of q and v at both ends of the last internal step (IDA's own y and y′)."""
+        n2 = 2 * self.n
+        a, b = self._previous, self._last
+        return (
+            (float(a.t), a.y[:n2].copy(), a.yp[:n2].copy()),
+            (float(b.t), b.y[:n2].copy(), b.yp[:n2].copy()),
+        )
+
+    def step_work(self, power: Callable[[float, np.ndarray, np.ndarray], float]) -> float:
+        """∫ P dt over the last internal step (see :func:`pfaff.integrate.work.hermite_work`)."""
+        ends = self.endpoints()
+        return hermite_work(ends, power, ends[0][0], ends[1][0])
+
+    def work_until(
+        self, power: Callable[[float, np.ndarray, np.ndarray], float], b: float
+    ) -> float:
+        """∫ P dt from the start of the last internal step to ``b`` inside it (Hermite)."""
+        ends = self.endpoints()
+        return hermite_work(ends, power, ends[0][0], b)
+
     def step(self) -> None:
         t_before = self.t
         res = self.solver.step(self.t_end, method="onestep", tstop=self.t_end)
         self._check(res)
-        self._last = res
+        self._previous, self._last = self._last, res
         # a step that hardly moves t against its own size (a few thousand ulps) counts as stalled
         tiny = STALL_ULPS * EPS * max(abs(self.t), STALL_FRACTION * self._span)
         self._tiny_count = self._tiny_count + 1 if self.t - t_before < tiny else 0

@@ -2,18 +2,25 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import ConstraintError, StateError
+from pfaff.core.errors import ConstraintError, OptionError, StateError
 from pfaff.integrate.projection import residuals
+from pfaff.numeric.model import check_model, check_state
 
 
 def _indices(model: Any, independent: Sequence[int | str]) -> np.ndarray:
     names = list(model.coordinate_names)
     out = []
+    if isinstance(independent, str | bytes) or not hasattr(independent, "__iter__"):
+        raise StateError(
+            f"`independent` must be a sequence of coordinate names or indices; got {independent!r}"
+        )
     for c in independent:
         if isinstance(c, str):
             if c not in names:
@@ -21,7 +28,7 @@ def _indices(model: Any, independent: Sequence[int | str]) -> np.ndarray:
                     f"unknown coordinate `{c}` in `independent` (have {', '.join(names[:8])})"
                 )
             out.append(names.index(c))
-        elif isinstance(c, int | np.integer) and 0 <= int(c) < model.n:
+        elif isinstance(c, int | np.integer) and not isinstance(c, bool) and 0 <= int(c) < model.n:
             out.append(int(c))
         else:
             raise StateError(
@@ -79,7 +86,13 @@ def consistent_state(
     >>> np.round(q, 12).tolist(), np.round(qd, 12).tolist()
     ([0.6, -0.8], [0.8, 0.6])
     """
-    t, q, qd = model._state(t, q, qd)
+    check_model(model)
+    names = model.coordinate_names if isinstance(model.coordinate_names, list) else None
+    t, q, qd = check_state(t, q, qd, model.n, names, ("t", "q", "qd"))
+    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not 0 < tol < math.inf:
+        raise OptionError(f"`tol` must be a positive finite number; got {tol!r:.80}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 0:
+        raise OptionError(f"`max_iter` must be an integer >= 0; got {max_iter!r:.80}")
     ind = _indices(model, independent)
     dep = np.setdiff1d(np.arange(model.n), ind)
     hol = np.asarray(model.holonomic, dtype=bool)

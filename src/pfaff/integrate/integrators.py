@@ -15,6 +15,7 @@ Small fused models run DOP853 on Python floats (:mod:`pfaff.fastrk`), others Sci
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -23,6 +24,7 @@ from scipy.integrate import DOP853, RK23, RK45
 from pfaff.core.errors import OptionError, PfaffError
 from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
 from pfaff.integrate.projection import Projector
+from pfaff.integrate.work import checked_sum, dense_work
 from pfaff.numeric.kkt import RESCALE_BELOW
 
 RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
@@ -145,6 +147,48 @@ class _RKStepper:
                 s.y = y
         Y = self._dense(ts)
         return [(Y[: self.n, i], Y[self.n :, i]) for i in range(len(ts))]
+
+    def endpoints(self) -> tuple[tuple[float, np.ndarray, np.ndarray], ...]:
+        """(t, y, ẏ) at both ends of the last step as computed (before any projection of its
+        end point): what the step already evaluated, no new right-hand side."""
+        s = self.solver
+        if isinstance(s, FloatDOP853):
+            t0, h, y0, y1, stages = s._last
+            return (t0, np.array(y0), np.array(stages[0])), (
+                t0 + h,
+                np.array(y1),
+                np.array(stages[s.n_stages]),
+            )
+        y1 = self._y_raw if self._y_raw is not None else s.y
+        return (float(s.t_old), s.y_old, s.K[0]), (float(s.t), y1, s.K[-1])
+
+    def step_work(self, power: Callable[[float, np.ndarray, np.ndarray], float]) -> float:
+        """∫ P dt over the last step by the Runge–Kutta method's own quadrature, h Σ b_i P(t_i, y_i).
+
+        This is what the method would compute for an extra component W' = P(t, y): the same
+        order as the step itself (8 for DOP853), from the stage states y_i = y₀ + h Σ a_ij K_j
+        the step already has: no new right-hand side, one power evaluation per stage with b_i ≠ 0.
+        """
+        s = self.solver
+        if isinstance(s, FloatDOP853):
+            t0, h, y0, _, stages = s._last
+            K, A, B, C = np.asarray(stages), DOP853.A, DOP853.B, DOP853.C
+            y0 = np.asarray(y0)
+        else:
+            t0, y0, K, A, B, C = float(s.t_old), s.y_old, s.K, s.A, s.B, s.C
+            h = float(s.t) - t0
+        n, terms = len(y0) // 2, []
+        for i, b in enumerate(B):
+            if b != 0.0:
+                y = y0 + h * (A[i, :i] @ K[:i]) if i else y0
+                terms.append(b * power(float(t0 + C[i] * h), y[:n], y[n:]))
+        return h * checked_sum(terms, t0 + h)
+
+    def work_until(
+        self, power: Callable[[float, np.ndarray, np.ndarray], float], b: float
+    ) -> float:
+        """∫ P dt from the start of the last step to ``b`` inside it, on the dense output."""
+        return dense_work(self.dense, power, float(self.endpoints()[0][0]), b)
 
     def finish(self) -> dict:
         self.stats["nfev"] = self.solver.nfev + self._restarts

@@ -8,6 +8,7 @@ into a :class:`pfaff.Trajectory` (q̈, λ, energies and residuals evaluated at e
 from __future__ import annotations
 
 import math
+import numbers
 import sys
 import time
 from collections.abc import Sequence
@@ -21,20 +22,34 @@ from pfaff.core.errors import (
     SimulationError,
     StateError,
     raised_in_generated_code,
+    undefined_at,
 )
 from pfaff.integrate.ida import IDAStepper
-from pfaff.integrate.integrators import BaumgarteRK, ProjectedRK
+from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.integrate.projection import Projector, residuals
+from pfaff.numeric.model import check_model, check_state
 from pfaff.results.trajectory import Trajectory
 
 METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
 
 
+def _real(v: object, key: str) -> float:
+    """An option's value as a float: a real number (not a string, a bool or a complex)."""
+    if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Real):
+        raise OptionError(f"`{key}` must be a real number; got {v!r:.80}")
+    x = float(v)
+    if math.isnan(x):
+        raise OptionError(f"`{key}` is NaN")
+    return x
+
+
 def _span(t_span: object) -> tuple[float, float]:
-    try:
-        t0, t1 = (float(v) for v in t_span)  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        raise OptionError(f"`t_span` must be two numbers (t0, t_end); got {t_span!r}") from None
+    if isinstance(t_span, str | bytes | dict) or not hasattr(t_span, "__iter__"):
+        raise OptionError(f"`t_span` must be two numbers (t0, t_end); got {t_span!r:.80}")
+    vals = list(t_span)  # type: ignore[call-overload]
+    if len(vals) != 2:
+        raise OptionError(f"`t_span` must be two numbers (t0, t_end); got {t_span!r:.80}")
+    t0, t1 = (_real(v, "t_span") for v in vals)
     if not (math.isfinite(t0) and math.isfinite(t1)):
         raise OptionError(f"`t_span` must be finite; got ({t0}, {t1})")
     if t1 <= t0:
@@ -47,9 +62,12 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
     if t_eval is None:
         return None
     try:
-        te = np.asarray(t_eval, dtype=float).ravel()
+        raw = np.asarray(t_eval)
+        if raw.dtype.kind not in "iufO":  # complex, strings, booleans: not times
+            raise TypeError
+        te = np.asarray(raw, dtype=float).ravel()
     except (TypeError, ValueError):
-        raise OptionError("`t_eval` must be an array of times") from None
+        raise OptionError(f"`t_eval` must be an array of real times; got {t_eval!r:.80}") from None
     if not np.isfinite(te).all():
         raise OptionError("`t_eval` contains NaN or infinity")
     if te.size == 0 or np.any(np.diff(te) <= 0):
@@ -59,28 +77,64 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
     return te
 
 
-def _options(method: str, kw: dict) -> dict:
-    if method not in METHODS:
-        raise OptionError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol"):
-        v = kw[key]
-        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
-            raise OptionError(f"`{key}` must be a finite number >= 0; got {v!r}")
-    if kw.get("ida_jacobian") not in (None, "fd", "approximate"):
-        raise OptionError(
-            f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r}"
-        )
+def _options(method: str, kw: dict, span: tuple[float, float]) -> dict:
+    """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
+    if not isinstance(method, str) or method not in METHODS:
+        raise OptionError(f"unknown method {method!r:.80}; choose one of {', '.join(METHODS)}")
+    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol"):
+        v = _real(kw[key], key)
+        if not (math.isfinite(v) and v >= 0):
+            raise OptionError(f"`{key}` must be a finite number >= 0; got {kw[key]!r}")
+        kw[key] = v
     if kw["rtol"] <= 0 or kw["atol"] <= 0 or kw["constraint_tol"] <= 0:
         raise OptionError("`rtol`, `atol` and `constraint_tol` must be positive")
+    if kw["max_step"] is not None:  # SciPy's own checks would surface as bare ValueErrors
+        v = _real(kw["max_step"], "max_step")
+        if not v > 0:
+            raise OptionError(f"`max_step` must be positive (or None: no limit); got {v:g}")
+        kw["max_step"] = v if math.isfinite(v) else None  # +inf: no limit
+    if kw["first_step"] is not None:
+        v, length = _real(kw["first_step"], "first_step"), span[1] - span[0]
+        if not (0 < v <= length):
+            raise OptionError(
+                f"`first_step` must be positive and at most the length of t_span ({length:g}); "
+                f"got {v:g}"
+            )
+        kw["first_step"] = v
+    if not isinstance(kw["integrator"], str) or kw["integrator"] not in RK_METHODS:
+        raise OptionError(
+            f"`integrator` must be one of {', '.join(RK_METHODS)}; got {kw['integrator']!r:.80}"
+        )
+    if not (kw.get("ida_jacobian") is None or kw["ida_jacobian"] in ("fd", "approximate")):
+        raise OptionError(
+            f"`ida_jacobian` must be 'fd' or 'approximate'; got {kw['ida_jacobian']!r:.80}"
+        )
+    for key, optional in (
+        ("project_initial", False),
+        ("project_output", True),
+        ("progress", True),
+        ("throw", False),
+    ):
+        v = kw.pop(key) if key in ("project_output", "progress", "throw") else kw[key]
+        if not (isinstance(v, bool | np.bool_) or (optional and v is None)):
+            allowed = "True, False or None" if optional else "True or False"
+            raise OptionError(f"`{key}` must be {allowed}; got {v!r:.80}")
     return kw
 
 
 def initial_state(
     model: Any, t0: float, q0: object, qd0: object, projector: Projector, opts: dict
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Check (q0, q̇0) against the constraints; polish it onto them, or refuse it with the residual."""
-    t0, q, qd = model._state(t0, q0, qd0)
+    """Check (q0, q̇0) against the constraints; polish it onto them, or refuse it with the residual.
+
+    Then check that the accelerations are determined there (``check_determined``: M positive
+    definite on the admissible motions), once per run.
+    """
+    names = model.coordinate_names if isinstance(model.coordinate_names, list) else None
+    t0, q, qd = check_state(t0, q0, qd0, model.n, names, ("t0", "q0", "qd0"))
     if model.m == 0:
+        if hasattr(model, "check_determined"):
+            model.check_determined(t0, q, qd)
         return q, qd
     f, g = residuals(model, t0, q, qd)
     f = np.where(projector.holonomic, f, 0.0)
@@ -96,6 +150,8 @@ def initial_state(
     q, qd, _ = projector(t0, q, qd)
     if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
         raise StateError("the initial state could not be projected onto the constraints")
+    if hasattr(model, "check_determined"):
+        model.check_determined(t0, q, qd)
     if hasattr(model, "_row_scales"):
         model._solve_accelerations(t0, q, qd)  # raises if no q̈ satisfies the constraints here
     return q, qd
@@ -174,6 +230,21 @@ def simulate(
         ``status`` is "success", "failed" (with the time and reason in ``message``) or
         "interrupted" (Ctrl-C; the part computed so far is kept).
 
+    Raises
+    ------
+    ModelTypeError
+        ``model`` is not a compiled model (e.g. equations not yet ``.compile(parameters)``-d).
+    OptionError
+        An option out of range or of the wrong type (named).
+    StateError
+        ``q0`` or ``qd0`` not real, finite and of shape (n,); the initial state off the
+        constraints (beyond ``initial_tol``); the equations not defined at it (an overflow).
+    InertiaError
+        Some acceleration is undetermined at the initial state (a coordinate without inertia
+        that no constraint fixes), or M is not positive definite on the admissible motions.
+    ConstraintError
+        No acceleration satisfies the constraints at the initial state.
+
     Examples
     --------
     >>> import numpy as np, pfaff
@@ -182,6 +253,7 @@ def simulate(
     >>> traj.q.shape, traj.status
     ((3, 2), 'success')
     """
+    check_model(model)
     t0, t1 = _span(t_span)
     te = _t_eval(t_eval, t0, t1)
     opts = _options(
@@ -198,15 +270,25 @@ def simulate(
             initial_tol=initial_tol,
             project_initial=project_initial,
             ida_jacobian=ida_jacobian,
+            project_output=project_output,
+            progress=progress,
+            throw=throw,
         ),
+        (t0, t1),
     )
-    projector = Projector(model, tol=constraint_tol)
-    q0a, qd0a = initial_state(model, t0, q0, qd0, projector, opts)
-    opts["projector"] = projector
-    stepper = METHODS[method](model, t0, q0a, qd0a, t1, opts)
+    projector = Projector(model, tol=opts["constraint_tol"])
+    try:
+        q0a, qd0a = initial_state(model, t0, q0, qd0, projector, opts)
+        opts["projector"] = projector
+        stepper = METHODS[method](model, t0, q0a, qd0a, t1, opts)
+    except (ValueError, ArithmeticError) as e:  # the user's equations, not defined at t0
+        if isinstance(e, PfaffError) or not raised_in_generated_code(e):
+            raise
+        raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = method != "baumgarte"
-    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress)
+    power = model.power if getattr(model, "applied_power", False) else None
+    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
         raise SimulationError(message)
@@ -217,22 +299,35 @@ def simulate(
 class _Run:
     """The stepping loop: records states, drives the progress bar, catches Ctrl-C and failures."""
 
-    def __init__(self, stepper, projector, te, t0: float, t1: float, progress) -> None:
+    def __init__(self, stepper, projector, te, t0: float, t1: float, progress, power=None) -> None:
         self.stepper, self.projector, self.te = stepper, projector, te
         self.project_steps = not isinstance(stepper, ProjectedRK)  # its steps end projected
         self.t0, self.t1 = t0, t1
         self.progress = sys.stderr.isatty() if progress is None else bool(progress)
+        self.power = power  # P(t, q, q̇) of the applied forces, or None when they do no work
         self.T: list[float] = []
         self.Q: list[np.ndarray] = []
         self.QD: list[np.ndarray] = []
+        self.W: list[float] = []  # work of the applied forces from t0 to each recorded time
         self.cpu = 0.0
 
-    def _record(self, t: float, q: np.ndarray, qd: np.ndarray, project: bool) -> None:
+    def _record(self, t: float, q: np.ndarray, qd: np.ndarray, project: bool, w: float) -> None:
         if project and self.projector is not None:
             q, qd, _ = self.projector(t, q, qd)
         self.T.append(t)
         self.Q.append(np.array(q))
         self.QD.append(np.array(qd))
+        self.W.append(w)
+
+    def _work(self, b: float | None = None) -> float:
+        """∫ P dt from the start of the last step to ``b`` (its end when None): the stepper's own
+        quadrature over a whole step, its dense output up to a time inside it
+        (:mod:`pfaff.integrate.work`)."""
+        if self.power is None:
+            return 0.0
+        if b is None:
+            return self.stepper.step_work(self.power)
+        return self.stepper.work_until(self.power, b)
 
     def _bar(self):
         if not self.progress:
@@ -248,23 +343,27 @@ class _Run:
         st, te = self.stepper, self.te
         k = 0  # next t_eval index
         if te is None or te[0] == self.t0:
-            self._record(self.t0, q0, qd0, False)
+            self._record(self.t0, q0, qd0, False, 0.0)
             k = 1 if te is not None else 0
         bar = self._bar()
         start = time.process_time()
         status, message = "success", "reached the end of the time span"
+        work = 0.0  # of the applied forces, up to the start of the current step
         try:
             while st.t < self.t1:
                 t_prev = st.t
                 st.step()
                 if te is None:
-                    self._record(st.t, *st.state(), self.project_steps)
+                    step_work = self._work()
+                    self._record(st.t, *st.state(), self.project_steps, work + step_work)
                 else:
                     j = int(np.searchsorted(te, st.t, side="right"))
                     if j > k:
                         for ti, (q, qd) in zip(te[k:j], st.dense(te[k:j]), strict=True):
-                            self._record(float(ti), q, qd, True)
+                            self._record(float(ti), q, qd, True, work + self._work(float(ti)))
                         k = j
+                    step_work = self._work()
+                work += step_work
                 if bar is not None:
                     bar.update(st.t - t_prev)
         except KeyboardInterrupt:
@@ -333,6 +432,7 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         kinetic=ev["T"],
         potential=ev["V"],
         jacobi=ev["T2"] - ev["T0"] + ev["V"],
+        nc_work=np.array(run.W),
         constraint_residual=res,
         stats=stats,
         status=status,

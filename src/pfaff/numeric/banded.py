@@ -10,11 +10,22 @@ several times faster than LAPACK's ``dtbtrs``, which is used otherwise. Measured
 
 from __future__ import annotations
 
+import functools
+from types import ModuleType
+
 import numpy as np
 import scipy.linalg.lapack as lapack
-import scipy.signal as signal
 
 from pfaff.core.errors import ConstraintError
+
+
+@functools.cache
+def _signal() -> ModuleType:
+    """``scipy.signal``, imported on first use: it costs 0.6 s, a third of ``import pfaff``."""
+    import scipy.signal
+
+    return scipy.signal
+
 
 HEAD_MAX = 64  # rows before the constant tail handled one by one
 
@@ -88,6 +99,7 @@ class LowerBand:
     def _filter(self, c: np.ndarray, y: np.ndarray, a: np.ndarray, i0: int) -> np.ndarray:
         for ci, yi in zip(_columns(c), _columns(y), strict=True):
             past = yi[i0 - 1 :: -1][: self.w] if i0 else np.zeros(self.w)
+            signal = _signal()
             zi = signal.lfiltic([1.0], a, past)
             yi[i0:] = signal.lfilter([1.0], a, ci[i0:], zi=zi)[0]
         return y
@@ -110,7 +122,7 @@ class LowerBand:
         else:
             z = np.empty_like(c, dtype=float)
             for ci, zi in zip(_columns(c), _columns(z), strict=True):
-                zi[i0:] = signal.lfilter([1.0], a, ci[i0:][::-1])[::-1]
+                zi[i0:] = _signal().lfilter([1.0], a, ci[i0:][::-1])[::-1]
         for i in range(i0 - 1, -1, -1):
             top = min(w, self.m - 1 - i)
             acc = c[i] - sum(R[j, i + j] * z[i + j] for j in range(1, top + 1))

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pfaff.core.errors import raised_in_generated_code, undefined_at
+
 
 @dataclass(frozen=True)
 class Kernel:
@@ -36,7 +38,12 @@ class Kernel:
     def __call__(self, t_: float, q: np.ndarray, qd: np.ndarray, p: Sequence[float]) -> list:
         """Evaluate every output for every instance; each result has shape (n_inst,)."""
         args = [q[c] for c in self.columns] + [qd[c] for c in self.columns]
-        outs = self.fn(*args, t_, *p)
+        try:
+            outs = self.fn(*args, t_, *p)
+        except (ValueError, ArithmeticError) as e:  # an overflow in the user's equations, ...
+            if not raised_in_generated_code(e):
+                raise
+            raise undefined_at(e, t_) from None
         shape = (self.n_inst,)
         if self.n_inst > 4096:  # constant outputs as read-only views: no memory per instance
             return [np.broadcast_to(np.asarray(o, dtype=float), shape) for o in outs]

@@ -20,7 +20,15 @@ import scipy.linalg
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
-from pfaff.core.errors import ConstraintError, StateError
+from pfaff.core.errors import (
+    ConstraintError,
+    InertiaError,
+    ModelTypeError,
+    PfaffError,
+    StateError,
+    raised_in_generated_code,
+    undefined_at,
+)
 from pfaff.numeric.kernel import Kernel
 from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, row_scales, solve_floored
 
@@ -28,7 +36,9 @@ if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
 
 _gesv = scipy.linalg.lapack.dgesv
+_potrf = scipy.linalg.lapack.dpotrf
 DENSE_LIMIT = 400  # n + m up to which the KKT system is assembled and solved densely
+M_PIVOT = 1e-10  # a Cholesky pivot of M below this times max diag M: M is (nearly) singular
 
 
 @dataclass
@@ -40,6 +50,7 @@ class DynamicsPart:
     mass_cols: np.ndarray
     forcing_rows: np.ndarray  # shape (n_forcing, n_inst)
     energy: Kernel
+    power: Kernel | None = None  # Σ Q_a q̇_a of the applied forces; None without any
 
 
 @dataclass
@@ -57,29 +68,108 @@ def _slots(lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return uniq, slot.ravel()
 
 
+def real_number(value: object, arg: str) -> float:
+    """``value`` as a finite real float, else a :class:`StateError` naming ``arg``.
+
+    Strings, booleans, complex numbers and arrays of more than one number are refused, not
+    converted (``float("1")``, ``float(True)`` and NumPy's complex-to-real cast would pass them).
+    """
+    if isinstance(value, float) or type(value) is int:  # the common case (np.float64 too)
+        v = float(value)
+    else:
+        if isinstance(value, str | bytes | bool | np.bool_) or np.ndim(value) != 0:
+            raise StateError(f"`{arg}` must be a real number; got {value!r:.80}")
+        if np.iscomplexobj(value) or isinstance(value, complex):
+            raise StateError(f"`{arg}` must be a real number; got the complex value {value!r:.80}")
+        try:
+            v = float(value)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise StateError(f"`{arg}` must be a real number; got {value!r:.80}") from None
+    if not math.isfinite(v):
+        raise StateError(f"`{arg}` is not finite ({v})")
+    return v
+
+
+def real_vector(value: object, arg: str, n: int, names: Sequence[str] | None = None) -> np.ndarray:
+    """``value`` as a finite float array of shape (n,), else a :class:`StateError` naming ``arg``.
+
+    Complex arrays are refused (NumPy would drop the imaginary part with a mere warning), and so
+    are strings, booleans, dicts, None and ragged or misshapen sequences.
+    """
+    if type(value) is np.ndarray and value.dtype == np.float64:  # the common case: no copy
+        a = value
+    else:
+        if value is None or isinstance(value, str | bytes | dict | set):
+            raise StateError(
+                f"`{arg}` must be an array of {n} real numbers; got {type(value).__name__} "
+                f"{value!r:.80}"
+            )
+        try:
+            raw = np.asarray(value)
+        except (TypeError, ValueError) as e:  # ragged nesting
+            raise StateError(f"`{arg}` must be an array of {n} real numbers: {e}") from None
+        kind = raw.dtype.kind
+        if kind == "c":
+            raise StateError(
+                f"`{arg}` is complex (dtype {raw.dtype}); states are real: pass the real part "
+                "explicitly if that is what you mean"
+            )
+        if kind == "O" and any(isinstance(v, str | bytes | bool | complex) for v in raw.flat):
+            kind = "U"
+        if kind not in "iufO":
+            raise StateError(
+                f"`{arg}` must be an array of {n} real numbers; got an array of dtype {raw.dtype}"
+            )
+        try:
+            a = np.asarray(raw, dtype=float)
+        except (TypeError, ValueError) as e:  # an object array holding something else
+            raise StateError(f"`{arg}` must be an array of {n} real numbers: {e}") from None
+    if a.shape != (n,):
+        which = ","
+        if names is not None:
+            which = f" for coordinates {', '.join(names[:6])}{'...' if n > 6 else ''};"
+        raise StateError(f"`{arg}` must have shape ({n},){which} got shape {a.shape}")
+    # one pass and no temporary: a finite sum means finite entries (NaN and ±inf propagate);
+    # only a sum that overflowed needs the elementwise test
+    if not (math.isfinite(float(np.sum(a))) or np.isfinite(a).all()):
+        raise StateError(f"`{arg}` contains NaN or infinity")
+    return a
+
+
 def check_state(
-    t: object, q: object, qd: object, n: int, names: Sequence[str] | None = None
+    t: object,
+    q: object,
+    qd: object,
+    n: int,
+    names: Sequence[str] | None = None,
+    args: tuple[str, str, str] = ("t", "q", "qd"),
 ) -> tuple[float, np.ndarray, np.ndarray]:
-    """Validate a numeric state: real t, finite q and q̇ of shape (n,); names go in the message."""
-    try:
-        tt = float(t)  # type: ignore[arg-type]
-        qa = np.asarray(q, dtype=float)
-        qda = np.asarray(qd, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise StateError(f"`t`, `q` and `qd` must be real numbers and arrays: {e}") from e
-    for name, arr in (("q", qa), ("qd", qda)):
-        if arr.shape != (n,):
-            which = ","
-            if names is not None:
-                which = f" for coordinates {', '.join(names[:6])}{'...' if n > 6 else ''};"
-            raise StateError(f"`{name}` must have shape ({n},){which} got shape {arr.shape}")
-        # one pass and no temporary: a finite sum means finite entries (NaN and ±inf propagate);
-        # only a sum that overflowed needs the elementwise test
-        if not (math.isfinite(float(np.sum(arr))) or np.isfinite(arr).all()):
-            raise StateError(f"`{name}` contains NaN or infinity")
-    if not np.isfinite(tt):
-        raise StateError("`t` is not finite")
-    return tt, qa, qda
+    """Validate a numeric state: real finite t, real finite q and q̇ of shape (n,).
+
+    Every numeric entry point of a model goes through here. ``names`` (the coordinates) and
+    ``args`` (the caller's names of t, q and q̇, e.g. ``("t0", "q0", "qd0")``) go in the messages.
+    """
+    tt = real_number(t, args[0])
+    return tt, real_vector(q, args[1], n, names), real_vector(qd, args[2], n, names)
+
+
+def check_model(model: object, arg: str = "model") -> None:
+    """Refuse anything but a compiled model with a :class:`ModelTypeError` naming ``arg``.
+
+    The common slip, equations or a system passed before ``.compile(parameters)``, is named.
+    """
+    if all(hasattr(model, a) for a in ("n", "m", "_state", "_solve_accelerations")):
+        return
+    kind = type(model).__name__
+    if hasattr(model, "compile"):
+        hint = "call `.compile(parameters)` on it first"
+    elif hasattr(model, "equations"):
+        hint = "call `.equations().compile(parameters)` on it first"
+    else:
+        hint = "make one with `system.equations().compile(parameters)`"
+    raise ModelTypeError(
+        f"`{arg}` must be a compiled model (NumericModel or StructuredModel); got {kind}: {hint}"
+    )
 
 
 class NumericModel:
@@ -136,6 +226,9 @@ class NumericModel:
         self._frows = cat([np.ravel(p.forcing_rows) for p in dyn])
         self.stats = {"kkt_solves": 0}
         self._fused = fused
+        # M not safely positive definite at the first state of the run (check_determined): the
+        # range-space solve (M⁻¹) is unusable, the whole augmented matrix is solved by LU
+        self._full_kkt = False
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
@@ -146,9 +239,11 @@ class NumericModel:
         mdata, fdata = [], []
         for part in self._dyn:
             outs = part.kernel(t, q, qd, self._p)
-            nm = part.mass_rows.shape[0]
+            nm, nf = part.mass_rows.shape[0], part.forcing_rows.shape[0]
             mdata.extend(outs[:nm])
-            fdata.extend(outs[nm:])
+            # [nm : nm + nf]: a block with no entries at all (a zero generalized force) has a
+            # kernel with one placeholder output, which is no forcing entry
+            fdata.extend(outs[nm : nm + nf])
         mvals = np.concatenate(mdata) if mdata else np.zeros(0)
         fvals = np.concatenate(fdata) if fdata else np.zeros(0)
         forcing = np.bincount(self._frows, weights=fvals, minlength=self.n)
@@ -172,11 +267,15 @@ class NumericModel:
         """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix."""
         t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
         M = sps.coo_matrix((self._dynamics(t, q, qd)[0], (self._mr, self._mc)), shape=(self.n,) * 2)
+        check_finite(t, "M", M)
         return M.toarray() if self.dense else M.tocsr()
 
     def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
         """Q - h, shape (n,)."""
-        return self._dynamics(*self._state(t, q, qd))[1]
+        t, q, qd = self._state(t, q, qd)
+        out = self._dynamics(t, q, qd)[1]
+        check_finite(t, "Q - h", out)
+        return out
 
     def constraint_matrix(self, t: float, q: object) -> np.ndarray | sps.csr_matrix:
         """A(q, t), shape (m, n): dense when small, else CSR."""
@@ -184,11 +283,15 @@ class NumericModel:
         A = sps.coo_matrix(
             (self._constraints(t, q, qd)[0], (self._ar, self._ac)), shape=(self.m, self.n)
         )
+        check_finite(t, "A", A)
         return A.toarray() if self.dense else A.tocsr()
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
-        return self._residual(*self._state(t, q, qd))
+        t, q, qd = self._state(t, q, qd)
+        f, g = self._residual(t, q, qd)
+        check_finite(t, "the constraint residual", f, g)
+        return f, g
 
     def _residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self._fused is not None:
@@ -202,9 +305,36 @@ class NumericModel:
         """Kinetic and potential energy (T, V)."""
         return self._energies(*self._state(t, q, qd))
 
+    @property
+    def applied_power(self) -> bool:
+        """True when some applied force (``add_force``, ``add_generalized_force``) can do work."""
+        return any(part.power is not None for part in self._dyn)
+
+    def power(self, t: float, q: object, qd: object) -> float:
+        """Power of the applied forces, Qᵀq̇ (W), whose integral is the work W_nc in the energy
+        balance T + V − E₀ − W_nc.
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.rolling_ring(3, force=True).equations().compile(
+        ...     {"M": 1, "r": 0.5, "F": 2})
+        >>> q, qd = pfaff.models.ring_state(3, 0.5, theta=0.0, theta_dot=4.0)
+        >>> model.power(0.0, q, qd)  # F ẋ = 2 · (r θ̇)
+        4.0
+        """
+        t, q, qd = self._state(t, q, qd)
+        return math.fsum(
+            float(np.sum(part.power(t, q, qd, self._p)[0]))
+            for part in self._dyn
+            if part.power is not None
+        )
+
     def kkt_matrix(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """The symmetric augmented matrix [[M, Aᵀ], [A, 0]] and right-hand side [Q - h; -bias]."""
+        t, q, qd = self._state(t, q, qd)
         K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+        check_finite(t, "[[M, Aᵀ], [A, 0]] or its right-hand side", K, forcing, bias)
         return K, np.concatenate([forcing, -bias])
 
     def _kkt(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
@@ -240,20 +370,25 @@ class NumericModel:
         t: float,
         floor: float = STATE_FLOOR,
         scales: np.ndarray | None = None,
+        full: bool | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """q̈ and λ of K [q̈; −λ] = [Q − h; c].
 
         Dense systems take the range-space solve of :mod:`pfaff.kkt`, which passes configurations
         where A loses rank (a linkage folded flat); a singular M (a coordinate without inertia)
-        goes to LAPACK gesv on K, then to least squares. Sparse systems go to SuperLU. ``floor``:
-        and ``scales``: see :mod:`pfaff.kkt` (``FLOOR`` with row scales in integrators,
-        ``STATE_FLOOR`` for single states).
+        goes to LAPACK gesv on K, then to least squares, and so does every solve when ``full``
+        (default: the model's mode, set by :meth:`check_determined`: M singular or nearly so,
+        where a Cholesky factorization of M may pass on rounding and return garbage). Sparse
+        systems go to SuperLU. ``floor``: and ``scales``: see :mod:`pfaff.kkt` (``FLOOR`` with
+        row scales in integrators, ``STATE_FLOOR`` for single states).
         """
         self.stats["kkt_solves"] += 1
         n = self.n
         try:
             if self.dense:
                 try:
+                    if self._full_kkt if full is None else full:
+                        raise np.linalg.LinAlgError
                     qdd, lam = solve_floored(K[:n, :n], K[n:, :n], forcing, c, floor, scales)
                 except np.linalg.LinAlgError:
                     qdd, lam = self._solve_full(K, np.concatenate([forcing, c]), t)
@@ -261,8 +396,10 @@ class NumericModel:
                 sol = spla.splu(K).solve(np.concatenate([forcing, c]))
                 qdd, lam = sol[:n], -sol[n:]
         except (np.linalg.LinAlgError, RuntimeError, ValueError) as e:
+            _check_finite(K, forcing, c, t)
             raise ConstraintError(self._singular_message(t)) from e
         if not math.isfinite(qdd.sum() + lam.sum()):
+            _check_finite(K, forcing, c, t)
             raise ConstraintError(self._singular_message(t))
         if floor == STATE_FLOOR and self.dense and self.m:
             self._check_consistent(K[n:, :n], qdd, c, t)
@@ -408,14 +545,26 @@ class NumericModel:
                 qdd = x[:n].tolist()
             return yl[n:] + qdd
 
+        if self._full_kkt:  # M (nearly) singular: no Cholesky of M, LU of the whole K
+
+            def full(t: float, yl: list) -> list:
+                K, r = kfn(t, *yl, *p)
+                x, info = gesv(K, r)[2:]
+                if info != 0:  # singular: the careful path
+                    x = self._solve_full(np.array(K), np.array(r), t)[0]
+                return yl[n:] + x[:n].tolist()
+
+            return full
         return fk.rfn(*p, *taus, slow) if fk.rfn is not None else slow
 
     def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The fused kernel's flat outputs at a state; non-real values are an error naming t."""
         try:
             v = np.array(self._fused.fn(t, *q.tolist(), *qd.tolist(), *self._p))
-        except ValueError as e:  # math domain error: sqrt or log of a negative value
-            raise StateError(f"the equations are not defined at t = {t:.17g} ({e})") from None
+        except (ValueError, ArithmeticError) as e:  # math domain error, overflow, division by 0
+            if isinstance(e, PfaffError) or not raised_in_generated_code(e):
+                raise
+            raise undefined_at(e, t) from None
         if v.dtype.kind == "c":
             raise StateError(_not_real(t))
         return v
@@ -443,8 +592,101 @@ class NumericModel:
         >>> qdd, lam = model.accelerations(0.0, q, qd)
         >>> round(float(qdd[1]), 12), round(float(lam[0]), 12)
         (2.0, -1.0)
+
+        Raises
+        ------
+        InertiaError
+            Some acceleration is undetermined here (a coordinate without inertia that no
+            constraint fixes) or M is not positive definite on the admissible motions.
+        ConstraintError
+            The constraints are inconsistent here.
+        StateError
+            A bad state, or equations not defined at it (an overflow, a math domain error).
         """
-        return self._solve_accelerations(*self._state(t, q, qd))
+        t, q, qd = self._state(t, q, qd)
+        if not self.dense:
+            try:
+                return self._solve_accelerations(t, q, qd)
+            except ConstraintError:
+                self.check_determined(t, q, qd)  # the precise error when M is the cause
+                raise
+        K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+        return self._solve_kkt(K, forcing, -bias, t, full=self._inertia(K, t))
+
+    def check_determined(self, t: float, q: object, qd: object) -> None:
+        """Check that M is positive definite on the admissible velocities at a state.
+
+        With Z an orthonormal basis of null(A), ZᵀMZ must be positive definite: else some
+        acceleration is undetermined (a coordinate without inertia that no constraint fixes) or
+        the kinetic energy is negative along an admissible motion. M itself may be singular
+        (quaternion attitude coordinates are, along the quaternion) as long as the constraints
+        fix what M leaves free; the model then solves the whole augmented matrix by LU (its
+        mode until the next check). Run once per simulation (its first state) and by
+        :meth:`accelerations`, never in the right-hand side: dense models pay one Cholesky
+        factorization of M when M is safely positive definite, and an SVD of A and an
+        eigenvalue decomposition of ZᵀMZ only when it is not. Sparse models (n + m >
+        ``DENSE_LIMIT``) get the O(nnz) part of the test only: coordinates with neither a mass
+        entry nor a constraint entry (SuperLU fails on any other exactly singular K).
+
+        Raises
+        ------
+        InertiaError
+            Naming the coordinates that span the undetermined (or negative) directions.
+        """
+        t, q, qd = self._state(t, q, qd)
+        n, K = self.n, self._kkt(t, q, qd)[0]
+        if not self.dense:
+            Kc = sps.csc_matrix(K)
+            Kc.eliminate_zeros()
+            free = np.flatnonzero(np.diff(Kc.indptr)[:n] == 0)  # a column of zeros in M and A
+            if free.size:
+                raise InertiaError(self._undetermined_message(t, free))
+            return
+        self._full_kkt = False  # the test below may raise: no stale mode left behind
+        self._full_kkt = self._inertia(K, t)
+
+    def _inertia(self, K: np.ndarray, t: float) -> bool:
+        """The test of :meth:`check_determined` on a dense K: True when M is not safely definite.
+
+        "Safely": every pivot of the Cholesky factorization of M above ``M_PIVOT`` times the
+        largest diagonal entry; a singular M passes LAPACK's test with pivots of rounding size.
+        """
+        n = self.n
+        M, A = K[:n, :n], K[n:, :n]
+        if not np.isfinite(K).all():
+            return False  # NaN or infinity: a StateError of the solve, not a question of inertia
+        U, info = _potrf(M)
+        if info == 0 and np.diag(U).min() ** 2 > M_PIVOT * np.diag(M).max():
+            return False  # positive definite: so is ZᵀMZ
+        Z = scipy.linalg.null_space(A) if self.m else np.eye(n)
+        if Z.shape[1] == 0:  # the constraints fix every acceleration
+            return True
+        H = Z.T @ M @ Z
+        w, V = np.linalg.eigh(0.5 * (H + H.T))
+        tol = 1e-12 * max(np.abs(w).max(), np.abs(np.diag(M)).max(), np.finfo(float).tiny)
+        bad = w <= tol
+        if not bad.any():
+            return True
+        U = np.abs(Z @ V[:, bad])  # the offending directions in coordinates
+        coords = np.flatnonzero((U >= 1e-6 * U.max(axis=0)).any(axis=1))
+        if (w[bad] < -tol).any():
+            raise InertiaError(
+                f"M is not positive definite on the admissible motions at t = {t:.17g}: the "
+                f"kinetic energy is negative along a motion of {self._coordinate_list(coords)} "
+                f"(eigenvalue {w.min():.3g} of ZᵀMZ); check the masses and kinetic-energy terms"
+            )
+        raise InertiaError(self._undetermined_message(t, coords))
+
+    def _coordinate_list(self, idx: np.ndarray) -> str:
+        names = ", ".join(f"`{self.coordinate_names[i]}`" for i in idx[:8])
+        return names + (f" and {idx.size - 8} more" if idx.size > 8 else "")
+
+    def _undetermined_message(self, t: float, idx: np.ndarray) -> str:
+        return (
+            f"the acceleration of {self._coordinate_list(idx)} is undetermined at t = {t:.17g}: "
+            "no inertia and no constraint fixes it (M is singular on the admissible motions). "
+            "Give it a mass or kinetic energy, or constrain it"
+        )
 
     def _energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
         T = V = 0.0
@@ -472,7 +714,7 @@ class NumericModel:
         """
         t = np.asarray(t, dtype=float)
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-        if self._fused is not None:
+        if self._fused is not None and not self._full_kkt:  # (a batched Cholesky of M)
             try:
                 return self._fused_states(t, q, qd)
             except (np.linalg.LinAlgError, ConstraintError):
@@ -528,6 +770,28 @@ class NumericModel:
             "redundant or inconsistent in this configuration, or M is singular on the admissible "
             "motions (a coordinate without inertia)"
         )
+
+
+def check_finite(t: float, what: str, *arrays: np.ndarray | sps.spmatrix) -> None:
+    """A NaN or infinity computed at a state is a :class:`StateError` naming ``what`` and t.
+
+    NumPy kernels overflow to infinity (with a warning) where Python's math raises: the values a
+    single-state call returns, or feeds to a solve, are checked here.
+    """
+    for a in arrays:
+        data = a.data if sps.issparse(a) else a
+        if not np.isfinite(data).all():
+            raise StateError(
+                f"{what} is NaN or infinite at t = {t:.17g}: the equations overflowed the "
+                "floating-point range or divided by zero there"
+            )
+
+
+def _check_finite(
+    K: np.ndarray | sps.spmatrix, forcing: np.ndarray, c: np.ndarray, t: float
+) -> None:
+    """A NaN or infinity in M, A, Q - h or Ȧq̇ + ḃ is a state error (an overflow), not a singular K."""
+    check_finite(t, "[[M, Aᵀ], [A, 0]], Q - h or Ȧq̇ + ḃ", K, forcing, c)
 
 
 def _not_real(t: float) -> str:

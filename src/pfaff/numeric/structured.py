@@ -35,7 +35,7 @@ import scipy.sparse as sps
 
 from pfaff.core.errors import ModelError, StateError
 from pfaff.core.lazy import LazySeq
-from pfaff.numeric.model import check_state
+from pfaff.numeric.model import check_finite, check_state, real_vector
 from pfaff.numeric.solvers import SparseSolver, TriangularSolver, triangular_plan
 from pfaff.numeric.streams import Index, StreamKernel, add_product, indices, scatter_add, take
 
@@ -53,8 +53,11 @@ class DynStreams:
     forcing : list of Index or ndarray
         Row of each forcing entry.
     energy_kernel : callable
-        ``energy_kernel(which)`` makes the summed kernel of ``[T, V]`` (``"energy"``) or of
-        ``[T, V, T₀, T₂]`` (``"energies"``), on first use.
+        ``energy_kernel(which)`` makes the summed kernel of ``[T, V]`` (``"energy"``), of
+        ``[T, V, T₀, T₂]`` (``"energies"``) or of the applied forces' power ``[Σ Q_a q̇_a]``
+        (``"power"``), on first use.
+    has_power : bool
+        Whether the block has applied forces (else its power is zero and never evaluated).
     """
 
     def __init__(
@@ -63,14 +66,17 @@ class DynStreams:
         upper: list[tuple[Index | np.ndarray, Index | np.ndarray, bool]],
         forcing: list[Index | np.ndarray],
         energy_kernel: Callable[[str], StreamKernel],
+        has_power: bool = False,
     ) -> None:
         self.kernel, self.upper, self.forcing = kernel, upper, forcing
         # a force on a fixed coordinate (x of the ring) only ever counts summed over the instances
         self.summed = [isinstance(ix, Index) and ix.fixed for ix in forcing]
         self.mass = [(r, c) for r, c, _ in upper] + [(c, r) for r, c, sym in upper if sym]
         self._energy_kernel = energy_kernel
+        self.has_power = has_power
         self._ekernel: StreamKernel | None = None
         self._pkernel: StreamKernel | None = None
+        self._wkernel: StreamKernel | None = None
 
     def mass_values(self, outs: list) -> list:
         """Values of :attr:`mass` entries from the kernel outputs (mirrored entries repeated)."""
@@ -82,6 +88,14 @@ class DynStreams:
         if self._ekernel is None:
             self._ekernel = self._energy_kernel("energy")
         return tuple(self._ekernel(t, q, qd))  # type: ignore[return-value]
+
+    def power(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        """Σ Q_a q̇_a of the applied forces, summed over the instances."""
+        if not self.has_power:
+            return 0.0
+        if self._wkernel is None:
+            self._wkernel = self._energy_kernel("power")
+        return float(self._wkernel(t, q, qd)[0])
 
     def energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, ...]:
         """(T, V, T₀, T₂) summed over the instances: T₀ = T at q̇ = 0, T₂ its quadratic part."""
@@ -263,7 +277,10 @@ class StructuredModel:
     # ------------------------------------------------------------------ public evaluation
     def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
         """Q - h, shape (n,)."""
-        return self._dynamics(*self._state(t, q, qd))[1]
+        t, q, qd = self._state(t, q, qd)
+        out = self._dynamics(t, q, qd)[1]
+        check_finite(t, "Q - h", out)
+        return out
 
     def mass_matrix(self, t: float, q: object, qd: object | None = None) -> sps.csr_matrix:
         """M(q, t) as a SciPy CSR matrix, shape (n, n)."""
@@ -271,7 +288,9 @@ class StructuredModel:
         mvals, _ = self._dynamics(t, q, qd)
         pairs = [rc for part in self._dyn for rc in part.mass]
         vals = [v for part, vs in zip(self._dyn, mvals, strict=True) for v in part.mass_values(vs)]
-        return _coo(pairs, vals, (self.n, self.n)).tocsr()
+        M = _coo(pairs, vals, (self.n, self.n)).tocsr()
+        check_finite(t, "M", M)
+        return M
 
     def constraint_matrix(self, t: float, q: object) -> sps.csr_matrix:
         """A(q, t) as a SciPy CSR matrix, shape (m, n)."""
@@ -279,7 +298,9 @@ class StructuredModel:
         avals, _ = self._accel_constraints(t, q, qd)
         pairs = [(part.rows, c) for part in self._con for c in part.cols]
         vals = [v for vs in avals for v in vs]
-        return _coo(pairs, vals, (self.m, self.n)).tocsr()
+        A = _coo(pairs, vals, (self.m, self.n)).tocsr()
+        check_finite(t, "A", A)
+        return A
 
     def _residuals(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         f, g = np.zeros(self.m), np.zeros(self.m)
@@ -296,12 +317,15 @@ class StructuredModel:
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
-        return self._residuals(*self._state(t, q, qd))
+        t, q, qd = self._state(t, q, qd)
+        f, g = self._residuals(t, q, qd)
+        check_finite(t, "the constraint residual", f, g)
+        return f, g
 
     def acceleration_residual(self, t: float, q: object, qd: object, qdd: object) -> np.ndarray:
         """A q̈ + Ȧq̇ + ḃ, shape (m,): zero for accelerations that satisfy the constraints."""
         t, q, qd = self._state(t, q, qd)
-        qdd = np.asarray(qdd, dtype=float)
+        qdd = real_vector(qdd, "qdd", self.n)
         avals, bias = self._accel_constraints(t, q, qd)
         return self.a_matvec(avals, qdd) + self._rows_vector(bias)
 
@@ -310,14 +334,15 @@ class StructuredModel:
     ) -> np.ndarray:
         """M q̈ - (Q - h), shape (n,): the generalized constraint force Aᵀλ on a motion."""
         t, q, qd = self._state(t, q, qd)
+        qdd = real_vector(qdd, "qdd", self.n)
         mvals, f = self._dynamics(t, q, qd)
-        return self.matvec(mvals, np.asarray(qdd, dtype=float)) - f
+        return self.matvec(mvals, qdd) - f
 
     def constraint_force(self, t: float, q: object, lam: object) -> np.ndarray:
         """Aᵀλ, shape (n,)."""
         t, q, qd = self._state(t, q, np.zeros(self.n))
+        lam = real_vector(lam, "lam", self.m)
         avals, _ = self._accel_constraints(t, q, qd)
-        lam = np.asarray(lam, dtype=float)
         y, tmp = np.zeros(self.n), self._scratch()
         for part, vals in zip(self._con, avals, strict=True):
             for c, val in zip(part.cols, vals, strict=True):
@@ -329,6 +354,16 @@ class StructuredModel:
         t, q, qd = self._state(t, q, qd)
         TV = [part.energy(t, q, qd) for part in self._dyn]
         return float(sum(x for x, _ in TV)), float(sum(v for _, v in TV))
+
+    @property
+    def applied_power(self) -> bool:
+        """True when some applied force can do work (see :meth:`power`)."""
+        return any(part.has_power for part in self._dyn)
+
+    def power(self, t: float, q: object, qd: object) -> float:
+        """Power of the applied forces, Qᵀq̇: the rate of the work W_nc in the energy balance."""
+        t, q, qd = self._state(t, q, qd)
+        return math.fsum(part.power(t, q, qd) for part in self._dyn)
 
     # ------------------------------------------------------------------ solves
     def _solve_accelerations(
@@ -413,7 +448,24 @@ class StructuredModel:
         >>> round(float(qdd[0]), 12), round(float(lam[0]), 12)  # ẍ = F/(2M), λ_1 = -F/2
         (0.5, -1.0)
         """
-        return self._solve_accelerations(*self._state(t, q, qd))
+        t, q, qd = self._state(t, q, qd)
+        qdd, lam = self._solve_accelerations(t, q, qd)
+        check_finite(t, "q̈ or λ", qdd, lam)  # NumPy kernels overflow to inf, silently
+        return qdd, lam
+
+    def check_determined(self, t: float, q: object, qd: object) -> None:
+        """Validate the state; the inertia test of :meth:`NumericModel.check_determined` is not run.
+
+        Why: a family model has up to 2^24 coordinates, and the test there (ZᵀMZ positive
+        definite, Z a basis of null(A)) is O(N³) dense, or O(nnz) with M and A assembled, which
+        these models never do. Nor is it needed for an undetermined acceleration: the triangular
+        solver determines every family coordinate from the constraints (it raises
+        :class:`ConstraintError` on a zero pivot of A_L) and solves the p ordinary ones from the
+        p×p projected matrix TᵀMT, which raises on a singular one; the sparse solver's SuperLU
+        raises on an exactly singular augmented matrix. Negative particle masses are refused when
+        the parameter values are given (``compile``).
+        """
+        self._state(t, q, qd)
 
     def project(
         self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10

@@ -1,82 +1,219 @@
-"""Figures of a simulated trajectory: coordinates, multipliers, energy error and residuals."""
+"""Figures of a simulated trajectory: coordinates, multipliers, energy balance and residuals.
+
+Figures are made with :class:`matplotlib.figure.Figure`, not pyplot: nothing is left open in
+pyplot's list of figures (a returned figure is shown once in Jupyter) and the user's backend is
+never switched.
+"""
 
 from __future__ import annotations
 
+import os
+import re
+import shutil
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pfaff.core.errors import OptionError
 from pfaff.core.files import atomic_path
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
     from pfaff.results.trajectory import Trajectory
 
 MAX_LINES = 8  # curves per panel; large systems show the first few
+# formats matplotlib writes with its own backends or Pillow (pgf needs a TeX system: checked)
+FIGURE_FORMATS = (
+    "png", "pdf", "svg", "svgz", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp", "gif", "pgf",
+)  # fmt: skip
+_GREEK = {
+    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa",
+    "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi",
+    "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi", "Psi",
+    "Omega",
+}  # fmt: skip
 
 
-def _lines(ax: Any, t: np.ndarray, Y: np.ndarray, names: list[str]) -> None:
-    for j in range(min(Y.shape[1], MAX_LINES)):
-        ax.plot(t, Y[:, j], lw=1.2, label=names[j])
-    if Y.shape[1]:
-        ax.legend(fontsize=7, ncol=2, loc="best")
+def figure_formats() -> tuple[str, ...]:
+    """File name extensions a figure can be written to here (lower case, without the dot).
+
+    Examples
+    --------
+    >>> "png" in figure_formats() and "xyz" not in figure_formats()
+    True
+    """
+    from matplotlib import rcParams
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    known = FigureCanvasBase.get_supported_filetypes()
+    tex = shutil.which(str(rcParams["pgf.texsystem"])) is not None
+    return tuple(f for f in FIGURE_FORMATS if f in known and (f != "pgf" or tex))
+
+
+def figure_format(path: str | os.PathLike) -> str:
+    """The format of a figure file from its extension; OptionError for an unknown one.
+
+    Examples
+    --------
+    >>> figure_format("run.PNG")
+    'png'
+    """
+    suffix = Path(path).suffix.lstrip(".").lower()
+    formats = figure_formats()
+    if suffix not in formats:
+        raise OptionError(
+            f"a figure file must end in one of {', '.join('.' + f for f in formats)}; "
+            f"got {os.fspath(path)!r}"
+        )
+    return suffix
+
+
+def save_figure(fig: Figure, path: str | os.PathLike, dpi: int = 110) -> None:
+    """Write ``fig`` to ``path`` atomically, in the format of its extension."""
+    fmt = figure_format(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=fmt)
+
+
+def math_name(name: str) -> str:
+    """A coordinate or multiplier name as matplotlib mathtext: ``theta12`` → ``$\\theta_{12}$``.
+
+    Names that are not a letter word with an optional index are returned unchanged.
+
+    Examples
+    --------
+    >>> math_name("lambda1"), math_name("x"), math_name("my name")
+    ('$\\\\lambda_{1}$', '$x$', 'my name')
+    """
+    m = re.fullmatch(r"([A-Za-z]+?)_?(\d*)", name)
+    if m is None:
+        return name
+    base, index = m.groups()
+    if base in _GREEK:
+        base = "\\" + base
+    elif len(base) > 1:
+        base = rf"\mathrm{{{base}}}"
+    return f"${base}_{{{index}}}$" if index else f"${base}$"
+
+
+def _with_unit(label: str, unit: str | None) -> str:
+    return f"{label} ({unit})" if unit else label
+
+
+def _lines(
+    ax: Axes, t: np.ndarray, Y: np.ndarray, names: list[str], units: Mapping[str, str], what: str
+) -> None:
+    """Up to MAX_LINES curves with math legend entries; the y label carries the common unit."""
+    shown = list(range(min(Y.shape[1], MAX_LINES)))
+    curve_units = {units.get(names[j]) for j in shown}
+    common = curve_units.pop() if len(curve_units) == 1 else None
+    for j in shown:
+        unit = None if common else units.get(names[j])
+        ax.plot(t, Y[:, j], lw=1.2, label=_with_unit(math_name(names[j]), unit))
+    if shown:
+        ax.legend(fontsize=7, ncols=2, loc="best")
+    ax.set_ylabel(_with_unit(what, common))
     if Y.shape[1] > MAX_LINES:
         ax.set_title(ax.get_title() + f" (first {MAX_LINES} of {Y.shape[1]})", fontsize=9)
 
 
-def plot_trajectory(traj: Trajectory, path: str | Path | None = None) -> Any:
-    """Four panels: q(t), λ(t), energy error E − E₀ (and Jacobi), max residuals (log scale).
+def _energy_panel(ax: Axes, traj: Trajectory, energy_unit: str | None) -> None:
+    t = traj.t
+    ax.set_title("energy balance")
+    balance = np.asarray(traj.energy_balance)
+    change = traj.energy - traj.energy[0]
+    worked = not np.allclose(balance, change, rtol=1e-12, atol=1e-12)
+    label = r"$T + V - E_0 - W_{nc}$" if worked else r"$T + V - E_0$"
+    ax.plot(t, balance, lw=1.2, label=f"energy balance {label}")
+    if not np.allclose(traj.jacobi - traj.jacobi[0], change, rtol=1e-12, atol=1e-12):
+        ax.plot(t, traj.jacobi - traj.jacobi[0], lw=1.0, ls="--", label=r"Jacobi $J - J_0$")
+    ax.legend(fontsize=7)
+    ax.set_ylabel(_with_unit("energy", energy_unit))
+
+
+def _residual_panel(ax: Axes, traj: Trajectory) -> None:
+    t = traj.t
+    ax.set_title("constraint residuals")
+    tiny = 1e-18  # exact zeros sit on the floor instead of stretching the axis
+    pos = np.maximum(np.abs(traj.position_residual).max(axis=1), tiny)
+    vel = np.maximum(np.abs(traj.velocity_residual).max(axis=1), tiny)
+    ax.semilogy(t, pos, lw=1.2, label=r"$\max\,|f|$")
+    ax.semilogy(t, vel, lw=1.2, label=r"$\max\,|A\dot{q} + b|$")
+    ax.legend(fontsize=7)
+    ax.set_ylabel("residual (constraint units)")
+
+
+def plot_trajectory(
+    traj: Trajectory,
+    path: str | os.PathLike | None = None,
+    *,
+    units: Mapping[str, str] | None = None,
+) -> Figure:
+    """Coordinates q(t), multipliers λ(t), the energy balance and the constraint residuals.
+
+    A panel with nothing to show is left out: a model without constraints has neither multipliers
+    nor residuals; an empty trajectory shows only its (empty) coordinates.
 
     Parameters
     ----------
     traj : Trajectory
-    path : str or Path, optional
-        Write the figure there (PNG, PDF, SVG; atomically).
+    path : str or PathLike, optional
+        Write the figure there (format from the extension: PNG, PDF, SVG, ...; atomically).
+    units : mapping of str to str, optional
+        Units by coordinate or multiplier name, and for ``"t"`` and ``"energy"`` (defaults:
+        ``"s"`` and ``"J"``; pass ``None`` values to leave them out). An axis shows the unit its
+        curves share; otherwise each legend entry shows its own.
 
     Returns
     -------
     matplotlib.figure.Figure
+        Not registered with pyplot: displayed once when returned in Jupyter; ``fig.savefig``
+        writes it again.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    >>> traj = pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0.0, 0.2))
+    >>> fig = plot_trajectory(traj, units={"x": "m", "y": "m"})
+    >>> [ax.get_title() for ax in fig.axes]  # doctest: +NORMALIZE_WHITESPACE
+    ['coordinates', 'multipliers (constraint forces)', 'energy balance', 'constraint residuals']
     """
-    import matplotlib
+    from matplotlib.figure import Figure
 
     if path is not None:
-        matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True, layout="constrained")
+        figure_format(path)  # refuse an unknown format before drawing anything
+    units = {"t": "s", "energy": "J", **(units or {})}
     t = traj.t
-    ax = axes[0, 0]
-    ax.set_title("coordinates q(t)")
-    _lines(ax, t, traj.q, traj.coordinate_names)
-    ax = axes[0, 1]
-    ax.set_title("multipliers λ(t) (constraint forces)")
-    _lines(ax, t, traj.multipliers, traj.multiplier_names)
-    ax = axes[1, 0]
-    ax.set_title("energy error")
+    m = traj.multipliers.shape[1] if traj.multipliers.ndim == 2 else 0
+    panels = ["q"]
+    if m and len(t):
+        panels.append("lambda")
     if len(t):
-        ax.plot(t, traj.energy - traj.energy[0], lw=1.2, label="T + V − E₀")
-        if not np.allclose(traj.jacobi, traj.energy, rtol=1e-12, atol=1e-12):
-            ax.plot(t, traj.jacobi - traj.jacobi[0], lw=1.0, ls="--", label="Jacobi − J₀")
-        ax.legend(fontsize=7)
-    ax.set_xlabel("t")
-    ax = axes[1, 1]
-    ax.set_title("constraint residuals")
-    if traj.constraint_residual.shape[-1] and len(t):
-        tiny = 1e-18  # exact zeros sit on the floor instead of stretching the axis
-        ax.semilogy(
-            t, np.maximum(np.abs(traj.position_residual).max(axis=1), tiny), lw=1.2, label="max |f|"
-        )
-        ax.semilogy(
-            t,
-            np.maximum(np.abs(traj.velocity_residual).max(axis=1), tiny),
-            lw=1.2,
-            label="max |A q̇ + b|",
-        )
-        ax.legend(fontsize=7)
-    ax.set_xlabel("t")
+        panels.append("energy")
+    if m and len(t):
+        panels.append("residual")
+    rows, cols = (2, 2) if len(panels) == 4 else (len(panels), 1)
+    fig = Figure(figsize=(11, 7) if cols == 2 else (9, 2.6 * rows + 0.8), layout="constrained")
+    axes = fig.subplots(rows, cols, sharex=True, squeeze=False).ravel()
+    for ax, panel in zip(axes, panels, strict=True):
+        if panel == "q":
+            ax.set_title("coordinates")
+            _lines(ax, t, traj.q, traj.coordinate_names, units, r"$q$")
+        elif panel == "lambda":
+            ax.set_title("multipliers (constraint forces)")
+            _lines(ax, t, traj.multipliers, traj.multiplier_names, units, r"$\lambda$")
+        elif panel == "energy":
+            _energy_panel(ax, traj, units.get("energy"))
+        else:
+            _residual_panel(ax, traj)
+    for ax in axes[-cols:]:
+        ax.set_xlabel(_with_unit("time $t$", units.get("t")))
     fig.suptitle(f"pfaff: {traj.method} ({traj.status}), {len(t)} points")
     if path is not None:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".") or "png")
-        plt.close(fig)
+        save_figure(fig, path)
     return fig

@@ -3,32 +3,50 @@
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pfaff.core.files import atomic_path
+from pfaff.results.figures import figure_format, save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PLOT_POINTS = 20_000  # multipliers drawn at most
 
 
-def plot_ring(rep: dict, path: str | os.PathLike) -> None:
-    """Draw the ring demo of :func:`pfaff.demo.ring_report` to ``path`` (PNG, SVG or PDF).
+def plot_ring(rep: dict, path: str | os.PathLike | None = None) -> Figure:
+    """Draw the ring demo of :func:`pfaff.cli.demo.ring_report` (to ``path`` if given).
 
     Left: the ring, its particles, the push at the centre, the friction λ_1 at the contact and the
-    tangential constraint force on each particle ((Aᵀλ)_θk / r along e_θ). Right: the multipliers
-    λ_k against k, with the no-slip friction λ_1 marked.
-    """
-    import matplotlib
+    tangential constraint force on each particle ((Aᵀλ)_θk / r along e_θ); the legend sits below
+    the drawing, never on a particle. Right: the multipliers λ_k against k, with the no-slip
+    friction λ_1 marked. Units are SI (the demo's M in kg, r in m, F in N).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Parameters
+    ----------
+    rep : dict
+        The report, with its ``_arrays``.
+    path : str or PathLike, optional
+        Figure file (PNG, SVG, PDF, ...: :func:`pfaff.results.figures.figure_formats`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Made without pyplot (nothing is left open there).
+    """
+    from matplotlib.figure import Figure
+
+    if path is not None:
+        figure_format(path)  # refuse an unknown format before drawing anything
 
     arr = rep["_arrays"]
     q, lam, gcf = arr["q"], arr["lam"], arr["generalized_constraint_force"]
     n, r = rep["particles"], rep["parameters"]["r"]
     F = rep["parameters"]["F"]
     x, th = q[0], q[1:]
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5.2), gridspec_kw={"width_ratios": [1, 1.25]})
+    fig = Figure(figsize=(12, 6), layout="constrained")
+    ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.25]})
     # --- the ring
     s = np.linspace(0, 2 * np.pi, 400)
     ax.plot(x + r * np.sin(s), r * np.cos(s), color="0.75", lw=1.5, zorder=1)
@@ -54,7 +72,7 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
         scale=1,
         color="tab:green",
         width=0.004,
-        label=f"tangential constraint force (max {np.max(np.abs(tang)):.3g}, own scale)",
+        label=f"tangential constraint force (max {np.max(np.abs(tang)):.3g} N, own scale)",
     )
     ax.annotate(
         "",
@@ -62,7 +80,7 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
         xytext=(x, 0),
         arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 2},
     )
-    ax.text(x + F * scale / 2, 0.06 * r, f"F = {F:g}", ha="center")
+    ax.text(x + F * scale / 2, 0.06 * r, f"F = {F:g} N", ha="center")
     ax.annotate(
         "",
         xy=(x + lam[0] * scale, -r),
@@ -72,7 +90,7 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     ax.text(
         x + lam[0] * scale / 2,
         -r - 0.1 * r,
-        f"friction λ₁ = {lam[0]:.4g}",
+        rf"friction $\lambda_1$ = {lam[0]:.4g} N",
         ha="center",
         va="top",
         color="tab:red",
@@ -80,9 +98,14 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
     ax.set_aspect("equal")
     ax.set_xlim(x - 1.6 * r, x + 1.6 * r)
     ax.set_ylim(-1.35 * r, 1.3 * r)
-    ax.set_title(f"Rolling ring, N = {n}: θ̈ = {rep['theta_ddot']:.6g}, ẍ = {rep['x_ddot']:.6g}")
-    ax.legend(loc="upper right", fontsize=8)
-    ax.set_xlabel("x")
+    ax.set_title(
+        rf"Rolling ring, N = {n}: $\ddot\theta$ = {rep['theta_ddot']:.6g} rad/s², "
+        rf"$\ddot x$ = {rep['x_ddot']:.6g} m/s²"
+    )
+    # below the axes: a legend inside would cover particles wherever the ring has turned them
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), fontsize=8, ncols=2)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("height above the centre (m)")
     # --- multipliers
     # every multiplier up to PLOT_POINTS, else a log-spaced sample (16 million points draw nothing new)
     k = np.unique(np.geomspace(1, n, PLOT_POINTS).astype(np.int64)) if n > PLOT_POINTS else None
@@ -93,20 +116,22 @@ def plot_ring(rep: dict, path: str | os.PathLike) -> None:
         ".-",
         ms=3 if n > 64 else 6,
         color="tab:blue",
-        label="spacing multipliers λ_k (k ≥ 2)",
+        label=r"spacing multipliers $\lambda_k$ (k ≥ 2, N m)",
     )
     bx.plot(
-        [1], [lam[0]], "o", color="tab:red", label=f"no-slip multiplier λ₁ = {lam[0]:.4g} (= -F/2)"
+        [1],
+        [lam[0]],
+        "o",
+        color="tab:red",
+        label=rf"no-slip multiplier $\lambda_1$ = {lam[0]:.4g} N (= −F/2)",
     )
     bx.axhline(0, color="0.6", lw=0.8)
     bx.set_xlabel("constraint k")
-    bx.set_ylabel("λ_k")
-    bx.set_title("Multipliers (found by back-substitution from λ_N down to λ_1)")
+    bx.set_ylabel(r"$\lambda_k$ (N m; $\lambda_1$ in N)")
+    bx.set_title(r"Multipliers (found by back-substitution from $\lambda_N$ down to $\lambda_1$)")
     bx.legend(fontsize=8)
     if n > 64:
         bx.set_xscale("log")
-    fig.tight_layout()
-    fmt = os.path.splitext(str(path))[1].lstrip(".").lower() or "png"
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format=fmt)
-    plt.close(fig)
+    if path is not None:
+        save_figure(fig, path, dpi=120)
+    return fig

@@ -29,6 +29,12 @@ class Trajectory:
         T + V.
     jacobi : ndarray, shape (k,)
         Jacobi integral q̇·∂L/∂q̇ − L = T₂ − T₀ + V (equals the energy when T is quadratic in q̇).
+    nc_work : ndarray, shape (k,)
+        W_nc(t): the work done by the applied (non-conservative) forces since the start, ∫ Qᵀq̇ dt,
+        integrated along the solution with the integrator's dense output.
+    energy_balance : ndarray, shape (k,)
+        T + V − E₀ − W_nc(t): zero up to the integration error while ideal constraints do no
+        work (scleronomic constraints; a moving constraint's work shows here).
     constraint_residual : ndarray, shape (k, 2, m)
         ``[:, 0]`` position level f(q, t) (0 for velocity constraints), ``[:, 1]`` velocity level
         A q̇ + b.
@@ -57,6 +63,7 @@ class Trajectory:
         self.kinetic: np.ndarray = fields["kinetic"]
         self.potential: np.ndarray = fields["potential"]
         self.jacobi: np.ndarray = fields["jacobi"]
+        self.nc_work: np.ndarray = fields.get("nc_work", np.zeros(len(fields["t"])))
         self.constraint_residual: np.ndarray = fields["constraint_residual"]
         self.stats: dict = fields["stats"]
         self.status: str = fields["status"]
@@ -72,6 +79,23 @@ class Trajectory:
     def energy(self) -> np.ndarray:
         """T + V, shape (k,)."""
         return self.kinetic + self.potential
+
+    @property
+    def energy_balance(self) -> np.ndarray:
+        """T + V − E₀ − W_nc(t), shape (k,): the energy error once the work of the applied
+        forces is accounted for (the pushed ring gains F·Δx; this stays at rounding level).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.rolling_ring(4, force=True).equations().compile(
+        ...     {"M": 1, "r": 0.5, "F": 2})
+        >>> traj = pfaff.simulate(model, *pfaff.models.ring_state(4, 0.5), (0.0, 1.0))
+        >>> bool(abs(traj.energy_balance).max() < 1e-9), round(float(traj.nc_work[-1]), 9)
+        (True, 1.0)
+        """
+        e = self.energy
+        return e - (e[0] if e.size else 0.0) - self.nc_work
 
     @property
     def success(self) -> bool:
@@ -121,7 +145,7 @@ class Trajectory:
         i = np.clip(np.searchsorted(self.t, ts, side="right") - 1, 0, len(self.t) - 2)
         h = (self.t[i + 1] - self.t[i])[:, None]
         s = (ts - self.t[i])[:, None] / h
-        q, qd = _hermite5(s, h, self.q[i], self.qd[i], self.qdd[i], *self._ends(i))
+        q, qd = hermite5(s, h, self.q[i], self.qd[i], self.qdd[i], *self._ends(i))
         if self._projector is not None:
             for k in range(len(ts)):
                 q[k], qd[k], _ = self._projector(float(ts[k]), q[k], qd[k])
@@ -144,6 +168,7 @@ class Trajectory:
         for j, name in enumerate(self.multiplier_names):
             cols[name] = self.multipliers[:, j]
         cols.update(T=self.kinetic, V=self.potential, energy=self.energy, jacobi=self.jacobi)
+        cols.update(nc_work=self.nc_work, energy_balance=self.energy_balance)
         for j, name in enumerate(self.multiplier_names):
             cols[f"f_{name}"] = self.constraint_residual[:, 0, j]
             cols[f"g_{name}"] = self.constraint_residual[:, 1, j]
@@ -173,6 +198,8 @@ class Trajectory:
                 "potential": ("time", self.potential),
                 "energy": ("time", self.energy),
                 "jacobi": ("time", self.jacobi),
+                "nc_work": ("time", self.nc_work),
+                "energy_balance": ("time", self.energy_balance),
                 "constraint_residual": (("time", "level", "multiplier"), self.constraint_residual),
             },
             coords={
@@ -198,11 +225,27 @@ class Trajectory:
             ds.to_netcdf(tmp, engine=_netcdf_engine())
         return Path(path)
 
-    def plot(self, path: str | Path | None = None) -> Any:
-        """Coordinates, multipliers, energy error and residuals on one figure (saved if ``path``)."""
+    def plot(self, path: str | Path | None = None, *, units: dict[str, str] | None = None) -> Any:
+        """Coordinates, multipliers, energy balance and residuals on one figure.
+
+        Panels with nothing to show (multipliers and residuals of an unconstrained model) are
+        left out.
+
+        Parameters
+        ----------
+        path : str or Path, optional
+            Also write the figure there (PNG, PDF, SVG, ...; from the extension).
+        units : dict of str to str, optional
+            Units by coordinate or multiplier name; ``"t"`` and ``"energy"`` default to s and J.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Made without pyplot, so Jupyter shows it once.
+        """
         from pfaff.results.figures import plot_trajectory
 
-        return plot_trajectory(self, path)
+        return plot_trajectory(self, path, units=units)
 
 
 def _netcdf_engine() -> str:
@@ -215,7 +258,7 @@ def _netcdf_engine() -> str:
     return "scipy"  # netCDF3, always available with SciPy
 
 
-def _hermite5(s, h, q0, v0, a0, q1, v1, a1) -> tuple[np.ndarray, np.ndarray]:
+def hermite5(s, h, q0, v0, a0, q1, v1, a1) -> tuple[np.ndarray, np.ndarray]:
     """Quintic Hermite interpolant matching q, q̇, q̈ at both ends, and its derivative."""
     s2, s3 = s * s, s * s * s
     s4, s5 = s3 * s, s3 * s2
