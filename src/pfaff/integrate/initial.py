@@ -11,7 +11,7 @@ import numpy as np
 
 from pfaff.core.errors import ConstraintError, OptionError, StateError
 from pfaff.integrate.projection import residuals
-from pfaff.numeric.model import check_model, check_state
+from pfaff.numeric.checks import check_model, check_state
 
 
 def _indices(model: Any, independent: Sequence[int | str]) -> np.ndarray:

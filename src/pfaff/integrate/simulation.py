@@ -27,7 +27,7 @@ from pfaff.core.errors import (
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.integrate.projection import Projector, residuals
-from pfaff.numeric.model import check_model, check_state
+from pfaff.numeric.checks import check_model, check_state
 from pfaff.results.trajectory import Trajectory
 
 METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
@@ -287,7 +287,7 @@ def simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = method != "baumgarte"
-    power = model.power if getattr(model, "applied_power", False) else None
+    power = model.power_function() if getattr(model, "applied_power", False) else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:

@@ -6,6 +6,7 @@ index arrays; the integrators use them.
 """
 
 from pfaff.numeric.backsub import multipliers_by_back_substitution
-from pfaff.numeric.model import NumericModel, check_state
+from pfaff.numeric.checks import check_state
+from pfaff.numeric.model import NumericModel
 
 __all__ = ["NumericModel", "check_state", "multipliers_by_back_substitution"]

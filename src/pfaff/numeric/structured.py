@@ -35,7 +35,7 @@ import scipy.sparse as sps
 
 from pfaff.core.errors import ModelError, StateError
 from pfaff.core.lazy import LazySeq
-from pfaff.numeric.model import check_finite, check_state, real_vector
+from pfaff.numeric.checks import check_finite, check_state, real_vector
 from pfaff.numeric.solvers import SparseSolver, TriangularSolver, triangular_plan
 from pfaff.numeric.streams import Index, StreamKernel, add_product, indices, scatter_add, take
 
@@ -363,7 +363,16 @@ class StructuredModel:
     def power(self, t: float, q: object, qd: object) -> float:
         """Power of the applied forces, Qᵀq̇: the rate of the work W_nc in the energy balance."""
         t, q, qd = self._state(t, q, qd)
-        return math.fsum(part.power(t, q, qd) for part in self._dyn)
+        return self.power_function()(t, q, qd)
+
+    def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
+        """:meth:`power` without the argument checks, for an integrator's checked states."""
+        parts = [part for part in self._dyn if part.has_power]
+
+        def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+            return math.fsum(part.power(t, q, qd) for part in parts)
+
+        return power
 
     # ------------------------------------------------------------------ solves
     def _solve_accelerations(

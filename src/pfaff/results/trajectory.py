@@ -258,22 +258,35 @@ def _netcdf_engine() -> str:
     return "scipy"  # netCDF3, always available with SciPy
 
 
-def hermite5(s, h, q0, v0, a0, q1, v1, a1) -> tuple[np.ndarray, np.ndarray]:
-    """Quintic Hermite interpolant matching q, q̇, q̈ at both ends, and its derivative."""
+def hermite5_weights(s, h):
+    """Weights of (q0, v0, a0, q1, v1, a1) in the quintic Hermite interpolant at s = (t − t0)/h,
+    and in its time derivative: two 6-tuples."""
     s2, s3 = s * s, s * s * s
     s4, s5 = s3 * s, s3 * s2
-    h00 = 1 - 10 * s3 + 15 * s4 - 6 * s5
-    h10 = s - 6 * s3 + 8 * s4 - 3 * s5
-    h20 = 0.5 * (s2 - 3 * s3 + 3 * s4 - s5)
-    h01 = 10 * s3 - 15 * s4 + 6 * s5
-    h11 = -4 * s3 + 7 * s4 - 3 * s5
-    h21 = 0.5 * (s3 - 2 * s4 + s5)
-    q = h00 * q0 + h * h10 * v0 + h * h * h20 * a0 + h01 * q1 + h * h11 * v1 + h * h * h21 * a1
-    d00 = -30 * s2 + 60 * s3 - 30 * s4
-    d10 = 1 - 18 * s2 + 32 * s3 - 15 * s4
-    d20 = 0.5 * (2 * s - 9 * s2 + 12 * s3 - 5 * s4)
-    d01 = -d00
-    d11 = -12 * s2 + 28 * s3 - 15 * s4
-    d21 = 0.5 * (3 * s2 - 8 * s3 + 5 * s4)
-    qd = (d00 * q0 + d01 * q1) / h + d10 * v0 + d11 * v1 + h * (d20 * a0 + d21 * a1)
+    wq = (
+        1 - 10 * s3 + 15 * s4 - 6 * s5,
+        h * (s - 6 * s3 + 8 * s4 - 3 * s5),
+        h * h * 0.5 * (s2 - 3 * s3 + 3 * s4 - s5),
+        10 * s3 - 15 * s4 + 6 * s5,
+        h * (-4 * s3 + 7 * s4 - 3 * s5),
+        h * h * 0.5 * (s3 - 2 * s4 + s5),
+    )
+    d00 = (-30 * s2 + 60 * s3 - 30 * s4) / h
+    wd = (
+        d00,
+        1 - 18 * s2 + 32 * s3 - 15 * s4,
+        h * 0.5 * (2 * s - 9 * s2 + 12 * s3 - 5 * s4),
+        -d00,
+        -12 * s2 + 28 * s3 - 15 * s4,
+        h * 0.5 * (3 * s2 - 8 * s3 + 5 * s4),
+    )
+    return wq, wd
+
+
+def hermite5(s, h, q0, v0, a0, q1, v1, a1) -> tuple[np.ndarray, np.ndarray]:
+    """Quintic Hermite interpolant matching q, q̇, q̈ at both ends, and its derivative."""
+    wq, wd = hermite5_weights(s, h)
+    ends = (q0, v0, a0, q1, v1, a1)
+    q = sum(w * x for w, x in zip(wq, ends, strict=True))
+    qd = sum(w * x for w, x in zip(wd, ends, strict=True))
     return q, qd

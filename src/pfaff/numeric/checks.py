@@ -1,0 +1,135 @@
+"""Checks where values enter the numeric stage: states, models, and values computed at a state.
+
+Every numeric entry point validates its arguments here, so a wrong type, a complex or non-finite
+value or a wrong shape is a :class:`pfaff.StateError` naming the argument, never NumPy's cast or
+traceback; and a value that overflowed at a state is an error naming the time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.sparse as sps
+
+from pfaff.core.errors import ModelTypeError, StateError
+
+
+def real_number(value: object, arg: str) -> float:
+    """``value`` as a finite real float, else a :class:`StateError` naming ``arg``.
+
+    Strings, booleans, complex numbers and arrays of more than one number are refused, not
+    converted (``float("1")``, ``float(True)`` and NumPy's complex-to-real cast would pass them).
+    """
+    if isinstance(value, float) or type(value) is int:  # the common case (np.float64 too)
+        v = float(value)
+    else:
+        if isinstance(value, str | bytes | bool | np.bool_) or np.ndim(value) != 0:
+            raise StateError(f"`{arg}` must be a real number; got {value!r:.80}")
+        if np.iscomplexobj(value) or isinstance(value, complex):
+            raise StateError(f"`{arg}` must be a real number; got the complex value {value!r:.80}")
+        try:
+            v = float(value)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise StateError(f"`{arg}` must be a real number; got {value!r:.80}") from None
+    if not math.isfinite(v):
+        raise StateError(f"`{arg}` is not finite ({v})")
+    return v
+
+
+def real_vector(value: object, arg: str, n: int, names: Sequence[str] | None = None) -> np.ndarray:
+    """``value`` as a finite float array of shape (n,), else a :class:`StateError` naming ``arg``.
+
+    Complex arrays are refused (NumPy would drop the imaginary part with a mere warning), and so
+    are strings, booleans, dicts, None and ragged or misshapen sequences.
+    """
+    if type(value) is np.ndarray and value.dtype == np.float64:  # the common case: no copy
+        a = value
+    else:
+        if value is None or isinstance(value, str | bytes | dict | set):
+            raise StateError(
+                f"`{arg}` must be an array of {n} real numbers; got {type(value).__name__} "
+                f"{value!r:.80}"
+            )
+        try:
+            raw = np.asarray(value)
+        except (TypeError, ValueError) as e:  # ragged nesting
+            raise StateError(f"`{arg}` must be an array of {n} real numbers: {e}") from None
+        kind = raw.dtype.kind
+        if kind == "c":
+            raise StateError(
+                f"`{arg}` is complex (dtype {raw.dtype}); states are real: pass the real part "
+                "explicitly if that is what you mean"
+            )
+        if kind == "O" and any(isinstance(v, str | bytes | bool | complex) for v in raw.flat):
+            kind = "U"
+        if kind not in "iufO":
+            raise StateError(
+                f"`{arg}` must be an array of {n} real numbers; got an array of dtype {raw.dtype}"
+            )
+        try:
+            a = np.asarray(raw, dtype=float)
+        except (TypeError, ValueError) as e:  # an object array holding something else
+            raise StateError(f"`{arg}` must be an array of {n} real numbers: {e}") from None
+    if a.shape != (n,):
+        which = ","
+        if names is not None:
+            which = f" for coordinates {', '.join(names[:6])}{'...' if n > 6 else ''};"
+        raise StateError(f"`{arg}` must have shape ({n},){which} got shape {a.shape}")
+    # one pass and no temporary: a finite sum means finite entries (NaN and ±inf propagate);
+    # only a sum that overflowed needs the elementwise test
+    if not (math.isfinite(float(np.sum(a))) or np.isfinite(a).all()):
+        raise StateError(f"`{arg}` contains NaN or infinity")
+    return a
+
+
+def check_state(
+    t: object,
+    q: object,
+    qd: object,
+    n: int,
+    names: Sequence[str] | None = None,
+    args: tuple[str, str, str] = ("t", "q", "qd"),
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """Validate a numeric state: real finite t, real finite q and q̇ of shape (n,).
+
+    Every numeric entry point of a model goes through here. ``names`` (the coordinates) and
+    ``args`` (the caller's names of t, q and q̇, e.g. ``("t0", "q0", "qd0")``) go in the messages.
+    """
+    tt = real_number(t, args[0])
+    return tt, real_vector(q, args[1], n, names), real_vector(qd, args[2], n, names)
+
+
+def check_model(model: object, arg: str = "model") -> None:
+    """Refuse anything but a compiled model with a :class:`ModelTypeError` naming ``arg``.
+
+    The common slip, equations or a system passed before ``.compile(parameters)``, is named.
+    """
+    if all(hasattr(model, a) for a in ("n", "m", "_state", "_solve_accelerations")):
+        return
+    kind = type(model).__name__
+    if hasattr(model, "compile"):
+        hint = "call `.compile(parameters)` on it first"
+    elif hasattr(model, "equations"):
+        hint = "call `.equations().compile(parameters)` on it first"
+    else:
+        hint = "make one with `system.equations().compile(parameters)`"
+    raise ModelTypeError(
+        f"`{arg}` must be a compiled model (NumericModel or StructuredModel); got {kind}: {hint}"
+    )
+
+
+def check_finite(t: float, what: str, *arrays: np.ndarray | sps.spmatrix) -> None:
+    """A NaN or infinity computed at a state is a :class:`StateError` naming ``what`` and t.
+
+    NumPy kernels overflow to infinity (with a warning) where Python's math raises: the values a
+    single-state call returns, or feeds to a solve, are checked here.
+    """
+    for a in arrays:
+        data = a.data if sps.issparse(a) else a
+        if not np.isfinite(data).all():
+            raise StateError(
+                f"{what} is NaN or infinite at t = {t:.17g}: the equations overflowed the "
+                "floating-point range or divided by zero there"
+            )
