@@ -102,7 +102,7 @@ class _RKStepper:
         on_lists = getattr(fun, "on_lists", None)
         if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
             self.solver: Any = FloatDOP853(
-                on_lists, fun, t0, y0, t_end, opts["rtol"], opts["atol"], **kw
+                fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], list_fun=on_lists, **kw
             )
         else:
             self.solver = RK_METHODS[name](
@@ -152,13 +152,6 @@ class _RKStepper:
         """(t, y, ẏ) at both ends of the last step as computed (before any projection of its
         end point): what the step already evaluated, no new right-hand side."""
         s = self.solver
-        if isinstance(s, FloatDOP853):
-            t0, h, y0, y1, stages = s._last
-            return (t0, np.array(y0), np.array(stages[0])), (
-                t0 + h,
-                np.array(y1),
-                np.array(stages[s.n_stages]),
-            )
         y1 = self._y_raw if self._y_raw is not None else s.y
         return (float(s.t_old), s.y_old, s.K[0]), (float(s.t), y1, s.K[-1])
 
@@ -170,13 +163,8 @@ class _RKStepper:
         the step already has: no new right-hand side, one power evaluation per stage with b_i ≠ 0.
         """
         s = self.solver
-        if isinstance(s, FloatDOP853):
-            t0, h, y0, _, stages = s._last
-            K, A, B, C = np.asarray(stages), DOP853.A, DOP853.B, DOP853.C
-            y0 = np.asarray(y0)
-        else:
-            t0, y0, K, A, B, C = float(s.t_old), s.y_old, s.K, s.A, s.B, s.C
-            h = float(s.t) - t0
+        t0, y0, K, A, B, C = float(s.t_old), s.y_old, s.K, s.A, s.B, s.C
+        h = float(s.t) - t0
         n, terms = len(y0) // 2, []
         for i, b in enumerate(B):
             if b != 0.0:
