@@ -4,13 +4,13 @@ Two separate ideas share one stepping contract (``t``, ``state()``, ``step()``, 
 ``stats``):
 
 - :class:`ProjectedRK` ("projection") integrates q̈ = q̈(q, q̇, t) from the KKT solve and, after
-  every accepted step, projects the state back onto f = 0, A q̇ + b = 0 (:mod:`pfaff.projection`);
+  every accepted step, projects the state back onto f = 0, A q̇ + b = 0 (:mod:`pfaff.integrate.projection`);
   the Runge–Kutta method restarts from the projected state.
 - :class:`BaumgarteRK` ("baumgarte") changes the vector field instead: the constraint rows of the
   KKT system ask for A q̈ + Ȧq̇ + ḃ = −2α (A q̇ + b) − β² f, so that the drift obeys a damped
   linear equation rather than growing.
 
-Small fused models run DOP853 on Python floats (:mod:`pfaff.fastrk`), others SciPy's solvers.
+Small fused models run DOP853 on Python floats (:mod:`pfaff.integrate.fastrk`), others SciPy's solvers.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def acceleration_field(
     """y' = [q̇, q̈] with y = [q, q̇], q̈ from the (optionally Baumgarte-stabilized) KKT solve.
 
     ``start`` = (t0, q0, q̇0) sets the reference constraint row sizes of the floor that carries
-    the solve through rank loss (:mod:`pfaff.kkt`).
+    the solve through rank loss (:mod:`pfaff.numeric.kkt`).
     """
     if hasattr(model, "_row_scales"):  # NumericModel
         scales = model._row_scales(*start) if start is not None else None
@@ -54,7 +54,7 @@ def acceleration_field(
 
 
 class RowReference:
-    """Reference sizes of the constraint rows for the floor of :mod:`pfaff.kkt`, kept current.
+    """Reference sizes of the constraint rows for the floor of :mod:`pfaff.numeric.kkt`, kept current.
 
     A row that starts (nearly) collapsed — a linkage released from a flat configuration — has
     no size of its own yet; while any row is below 1e-3 of the largest, the sizes at each

@@ -12,7 +12,7 @@ same projection when M is definite on the admissible motions; large sparse model
 diagonal of M. The damping δ = 1e-7 σ_max (Tikhonov) matters only where the constraint Jacobian
 loses rank — a linkage folded flat: there the correction along the collapsing direction stays
 bounded, and once the linkage has passed the fold the mass-orthogonal projection restores the
-constraint impulse that the floored acceleration solve (:mod:`pfaff.kkt`) softened. Dense
+constraint impulse that the floored acceleration solve (:mod:`pfaff.numeric.kkt`) softened. Dense
 matrices go to LAPACK, sparse ones to SuperLU. A model may supply its own
 ``project(t, q, qd, tol=, max_iter=)`` (structured O(N) solvers do).
 """

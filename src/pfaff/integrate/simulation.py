@@ -193,7 +193,7 @@ def simulate(
     method : {"projection", "baumgarte", "ida"}
         "projection" (default): adaptive Runge–Kutta on the acceleration-level equations, the state
         projected mass-orthogonally onto f = 0 and A q̇ + b = 0 after every step; passes
-        configurations where A loses rank (see :mod:`pfaff.kkt`). "baumgarte": the stabilized
+        configurations where A loses rank (see :mod:`pfaff.numeric.kkt`). "baumgarte": the stabilized
         field A q̈ + Ȧq̇ + ḃ = −2α(A q̇ + b) − β² f, no projection (through such configurations
         only with α, β fast against the motion). "ida": SUNDIALS IDA on the index-2 GGL
         formulation.

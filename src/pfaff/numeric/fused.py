@@ -30,7 +30,7 @@ class FusedKernel:
     ofn, sfn : callable
         ``ofn`` (same arguments as ``kfn``) gives the flat [M entries, A entries, Q − h, c] and
         ``sfn(*that, *taus, cap)`` q̈ by straight-line Schur-complement code with the pivots of
-        A M⁻¹Aᵀ floored (:mod:`pfaff.smallsolve`, :mod:`pfaff.kkt`).
+        A M⁻¹Aᵀ floored (:mod:`pfaff.numeric.smallsolve`, :mod:`pfaff.numeric.kkt`).
     rfn : callable or None
         Both in one generated function: ``rfn(*params, alpha, beta, *taus, cap, slow)`` returns
         ``rhs(t, y: list) -> [q̇, q̈]`` (a list), which calls ``slow(t, y)`` where M is not

@@ -18,14 +18,14 @@ Two floors are used.
 
 - The integrators' right-hand side: τ_i = ``FLOOR`` · min(s_i, max diag S) per constraint row,
   where s_i is the row's own size A_i M⁻¹ A_iᵀ at the initial state (:func:`row_scales`; raised
-  as a running maximum while a row starts collapsed, see :class:`pfaff.integrators.RowReference`).
+  as a running maximum while a row starts collapsed, see :class:`pfaff.integrate.integrators.RowReference`).
   A row is softened only when it has shrunk against itself while another row has not — not because
   it belongs to a heavy body, a short link or carries a small constant factor, and not when all
   rows shrink together (a one-row system is never floored). Runge–Kutta stages lie off the manifold and
   a small floor lets their drift through amplified: on the four-bar of
   ``tests/test_simulate_fourbar.py`` at rtol = 5e-13 … 5e-12, FLOOR = 1e-5 kept the angle to
   4e-12 … 3e-11 through four folds, 1e-6 to 4e-12 … 2e-8, 1e-8 to 7e-9 … 1e-6. The
-  mass-orthogonal projection after each step (:mod:`pfaff.projection`) restores the constraint
+  mass-orthogonal projection after each step (:mod:`pfaff.integrate.projection`) restores the constraint
   impulse the softened row missed.
 - A single state asked for by a user (``accelerations``, the values a trajectory reports):
   τ = ``STATE_FLOOR`` · max diag S at the level of rounding, where the exact solve is as accurate
@@ -47,7 +47,7 @@ _trtrs = scipy.linalg.lapack.dtrtrs
 
 
 def floored_array(e: np.ndarray, tau: np.ndarray | float) -> np.ndarray:
-    """The floor of :func:`pfaff.smallsolve.floored`, elementwise.
+    """The floor of :func:`pfaff.numeric.smallsolve.floored`, elementwise.
 
     Examples
     --------

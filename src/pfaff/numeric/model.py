@@ -276,12 +276,12 @@ class NumericModel:
     ) -> tuple[np.ndarray, np.ndarray]:
         """q̈ and λ of K [q̈; −λ] = [Q − h; c].
 
-        Dense systems take the range-space solve of :mod:`pfaff.kkt`, which passes configurations
+        Dense systems take the range-space solve of :mod:`pfaff.numeric.kkt`, which passes configurations
         where A loses rank (a linkage folded flat); a singular M (a coordinate without inertia)
         goes to LAPACK gesv on K, then to least squares, and so does every solve when ``full``
         (default: the model's mode, set by :meth:`check_determined`: M singular or nearly so,
         where a Cholesky factorization of M may pass on rounding and return garbage). Sparse
-        systems go to SuperLU. ``floor``: and ``scales``: see :mod:`pfaff.kkt` (``FLOOR`` with
+        systems go to SuperLU. ``floor``: and ``scales``: see :mod:`pfaff.numeric.kkt` (``FLOOR`` with
         row scales in integrators, ``STATE_FLOOR`` for single states).
         """
         self.stats["kkt_solves"] += 1
@@ -369,7 +369,7 @@ class NumericModel:
         return self._solve_kkt(K, forcing, c, t, floor, scales)
 
     def _row_scales(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
-        """Reference constraint row sizes for the integrators' floor (:func:`pfaff.kkt.row_scales`)."""
+        """Reference constraint row sizes for the integrators' floor (:func:`pfaff.numeric.kkt.row_scales`)."""
         if not self.dense or not self.m:
             return None
         K = self._kkt(t, q, qd)[0]
@@ -384,9 +384,9 @@ class NumericModel:
         """y' = [q̇, q̈] of y = [q, q̇] (Baumgarte-stabilized when α, β > 0), for integrators.
 
         Small systems get a closure around the fused kernel: a few microseconds per call; its
-        attribute ``on_lists`` is the same function on lists of floats (:mod:`pfaff.fastrk`).
+        attribute ``on_lists`` is the same function on lists of floats (:mod:`pfaff.integrate.fastrk`).
         A non-finite q̈ raises :class:`StateError` naming the time. ``scales``: reference row
-        sizes for the floor of :mod:`pfaff.kkt` (None: no floor); the function's ``rescale(new)``
+        sizes for the floor of :mod:`pfaff.numeric.kkt` (None: no floor); the function's ``rescale(new)``
         replaces them during a run.
         """
         n = self.n

@@ -14,7 +14,7 @@ back to the general path.
 Where the constraint Jacobian loses rank (a linkage folded flat) S becomes singular. With
 ``floor=True`` the j-th pivot d of its Cholesky factorization is replaced by :func:`floored`
 (d, τ_j), with thresholds τ_j given per constraint row: unchanged when d >= τ_j, a smooth floor
-of at least τ_j/2 below. Only the collapsing direction is affected (see :mod:`pfaff.kkt`).
+of at least τ_j/2 below. Only the collapsing direction is affected (see :mod:`pfaff.numeric.kkt`).
 """
 
 from __future__ import annotations
@@ -113,9 +113,9 @@ def schur_solver(
     """Generate ``solve(*mass_values, *A_values, *F, *c) -> q̈ (list of n floats)``.
 
     With ``damped=True`` the function takes one more argument ``shift`` and solves with
-    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.projection`). With
+    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.integrate.projection`). With
     ``floor=True`` it takes m + 1 more arguments ``tau0 … tau{m-1}, cap`` and floors the j-th
-    pivot of S at min(tau_j, cap · max diag S) (accelerations through rank loss, :mod:`pfaff.kkt`).
+    pivot of S at min(tau_j, cap · max diag S) (accelerations through rank loss, :mod:`pfaff.numeric.kkt`).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""KKT solvers of :class:`pfaff.structured.StructuredModel`, chosen once from the structure.
+"""KKT solvers of :class:`pfaff.numeric.structured.StructuredModel`, chosen once from the structure.
 
 Measured on the 2-core development machine for the rolling ring (``benchmarks/ring_scale.py``):
 at N = 2^20 SuperLU on the assembled augmented matrix takes about 2 s per solve (and 16 GB-class
@@ -12,7 +12,7 @@ When the constraint Jacobian is constant (the ring's), T = [I; -A_L⁻¹A_G] and
 at build time and a solve touches only the state-dependent mass entries: TᵀMT is summed entry by
 entry and M T is never formed, so a solve for q̈ alone (the integrators' right-hand side) streams
 the varying entries, q̈ and T once each. Level-1 BLAS runs in blocks below OpenBLAS's threading
-threshold (see :data:`pfaff.streams.BLAS_BLOCK`).
+threshold (see :data:`pfaff.numeric.streams.BLAS_BLOCK`).
 """
 
 from __future__ import annotations
