@@ -360,3 +360,64 @@ def test_write_keeps_permissions(tmp_path: Path) -> None:
     target.chmod(0o640)
     _traj().to_csv(target)
     assert target.stat().st_mode & 0o777 == 0o640
+
+
+# ---------------------------------------------------------------- from the hostile review
+@pytest.mark.parametrize("text", HOSTILE)
+def test_work_at_refuses_strings(text: str) -> None:
+    x, y = _xy()
+    s = pfaff.System([x, y])
+    s.add_particle(1, [x, y])
+    s.add_force([1, 0], at=[x, y])
+    with pytest.raises(ModelTypeError, match="`at"):
+        s.work()[0].does_work(at={x: text})
+    with pytest.raises(ModelTypeError, match="`at` keys"):
+        s.work()[0].does_work(at={"x": 1})
+
+
+@pytest.mark.parametrize("name", ["_q0", "_qd1", "_fq0", "_fqd2"])
+def test_placeholder_names_are_refused(name: str) -> None:
+    """pfaff's template placeholders as parameter names would silently change the equations."""
+    with pytest.raises(ModelError, match="placeholders"):
+        pfaff.models.pendulum(gravity=name)
+
+
+def test_reduce_solutions_must_satisfy_the_constraints() -> None:
+    s = pfaff.models.cartesian_pendulum()
+    x, y = s.coordinates
+    L = sp.Symbol("L")
+    with pytest.raises(ConstraintError, match="do not satisfy"):
+        s.reduce([x], solutions={y: x})
+    with pytest.raises(ModelError, match="independent coordinates only"):
+        s.reduce([x], solutions={y: y})
+    with pytest.raises(ModelTypeError, match="`solutions`"):
+        s.reduce([x], solutions=5)  # type: ignore[arg-type]
+    with pytest.raises(ModelTypeError, match="solutions"):
+        s.reduce([x], solutions={y: "x"})
+    red = s.reduce([x], solutions={y: -sp.sqrt(L**2 - x**2)})
+    assert red.n == 1  # the right branch is accepted
+    with pytest.raises(ModelError, match="cannot be compiled"):
+        s.reduce([x]).compile(PEND)  # unsolved: projection form
+
+
+def test_csv_keeps_every_column_when_names_collide(tmp_path: Path) -> None:
+    """A coordinate named t (or T, V, energy) must not replace the time column."""
+    a, b = pfaff.coordinates("t T")
+    s = pfaff.System([a, b])
+    s.add_particle(1, [a, b])
+    s.add_potential_energy(9.81 * b)
+    s.add_holonomic_constraint(a**2 + b**2 - 1, name="rod")
+    traj = pfaff.simulate(s.equations().compile({}), [1.0, 0.0], [0.0, 0.0], (0.0, 0.5))
+    header = traj.to_csv(tmp_path / "n.csv").read_text().splitlines()[0].split(",")
+    assert len(header) == len(set(header)) == len(traj._columns())
+    data = np.loadtxt(tmp_path / "n.csv", delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(data[:, header.index("t")], traj.t)
+    np.testing.assert_array_equal(data[:, header.index("t~2")], traj.q[:, 0])
+    np.testing.assert_array_equal(data[:, header.index("T")], traj.q[:, 1])
+
+
+def test_tiny_atol_is_not_a_crash() -> None:
+    traj = pfaff.simulate(_pendulum(), [1.0, 0.0], [0.0, 0.0], (0.0, 0.1), atol=1e-300)
+    assert traj.status in ("success", "failed")
+    if traj.status == "success":
+        assert np.hypot(*traj.q[-1]) == pytest.approx(1.0, abs=1e-9)

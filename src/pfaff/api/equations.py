@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pfaff.core.errors import ModelError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.equations import Derivation, Solution
@@ -74,6 +75,12 @@ class EquationsOfMotion(Derivation):
         >>> round(float(qdd[0]), 6)
         -2.351582
         """
+        if "dependent_velocities" in self.extra:
+            raise ModelError(
+                "these reduced equations still contain dependent coordinates (projection form): "
+                "they cannot be compiled; give `solutions` for the dependent coordinates to "
+                "System.reduce, or compile the full equations"
+            )
         if self.family:
             return compile_structured(self, parameters or {})
         return compile_equations(self, parameters or {})

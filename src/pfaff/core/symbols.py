@@ -20,6 +20,7 @@ t: sp.Symbol = dynamicsymbols._t
 """The time symbol, identical to ``sympy.physics.vector.dynamicsymbols._t``."""
 
 
+_RESERVED = re.compile(r"_f?qd?[0-9]+")  # local placeholders of templates and fused code
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(:[0-9]+)?")  # a name, or a range name1:N
 
 
@@ -140,6 +141,12 @@ def as_expr(value: object, what: str) -> sp.Expr:
         raise ModelError(f"{what} contains NaN or infinity: {expr}")
     if expr.has(sp.I):
         raise ModelError(f"{what} must be real, got the complex {expr}")
+    reserved = [str(s) for s in expr.free_symbols if _RESERVED.fullmatch(str(s))]
+    if reserved:
+        raise ModelError(
+            f"{what} uses {', '.join(sorted(reserved))}: names of the form _q0, _qd0 (and _fq0, "
+            "_fqd0) are pfaff's placeholders; rename the symbol"
+        )
     return expr
 
 

@@ -14,11 +14,12 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from pfaff.core.errors import ConstraintError, ModelError
-from pfaff.core.symbols import t
+from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError
+from pfaff.core.symbols import as_expr, t
 from pfaff.derive.equations import Derivation
 from pfaff.derive.templates import derive
 from pfaff.mechanics.system import SystemSpec
@@ -89,6 +90,35 @@ def tidy(e: sp.Expr) -> sp.Expr:
         if sp.count_ops(s) <= sp.count_ops(out):
             out = s
     return sp.factor_terms(out)
+
+
+def _check_solutions(eom: Derivation, phi: dict, given: dict) -> None:
+    """The given branches must satisfy the holonomic constraints: checked numerically at a few
+    random points (coordinates, parameters and t), where every term is real."""
+    if not given:
+        return
+    rng = np.random.default_rng(20261124)
+    for f in (f for f in eom.holonomic_constraints if f is not None):
+        r = f.xreplace(phi)
+        free = sorted(r.free_symbols | r.atoms(AppliedUndef), key=sp.default_sort_key)
+        checked = 0
+        for _ in range(20):
+            point = {s: sp.Float(rng.uniform(0.2, 0.6)) for s in free}
+            point.update({s: sp.Float(rng.uniform(1.5, 2.5)) for s in free if s in eom.parameters})
+            try:
+                v = complex(r.xreplace(point).evalf())
+            except (TypeError, ValueError):
+                continue
+            if abs(v.imag) > 1e-9:
+                continue
+            checked += 1
+            if abs(v.real) > 1e-8:
+                raise ConstraintError(
+                    f"`solutions` {given} do not satisfy the constraint {f} = 0 "
+                    f"(residual {v.real:.3g} at a test point)"
+                )
+            if checked >= 3:
+                break
 
 
 def _solve_positions(eom: Derivation, dependent: list, solutions: dict) -> dict[sp.Expr, sp.Expr]:
@@ -162,11 +192,16 @@ def reduce(system: SystemSpec, independent: object, *, solutions: dict | None = 
             f"{eom.n} coordinates with {eom.m} constraints leave {eom.n - eom.m} independent ones; "
             f"{len(ind)} were named"
         )
-    solutions = dict(solutions or {})
-    for k in solutions:
+    if solutions is not None and not isinstance(solutions, dict):
+        raise ModelTypeError(f"`solutions` must be a dict q_d -> φ(q_i, t), got {solutions!r:.80}")
+    solutions = {k: as_expr(v, f"`solutions[{k}]`") for k, v in (solutions or {}).items()}
+    for k, v in solutions.items():
         if k not in dependent:
             raise ModelError(f"`solutions` key {k} is not a dependent coordinate")
+        if any(d in dependent for d in v.atoms(AppliedUndef)):
+            raise ModelError(f"`solutions[{k}]` = {v} must be in the independent coordinates only")
     phi = _solve_positions(eom, dependent, solutions)
+    _check_solutions(eom, phi, solutions)
     ind_speeds = [q.diff(t) for q in ind]
     vel: dict[sp.Expr, sp.Expr] = {q.diff(t): q.diff(t) for q in ind}
     for d, e in phi.items():

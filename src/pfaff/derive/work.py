@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from pfaff.core.errors import PfaffError
-from pfaff.core.symbols import t
+from pfaff.core.errors import ModelTypeError, PfaffError
+from pfaff.core.symbols import as_expr, t
 from pfaff.derive.reduce import tidy
 from pfaff.derive.templates import derive
 from pfaff.mechanics.system import SystemSpec
@@ -66,7 +66,10 @@ class ForceWork:
             SymPy cannot decide.
         """
         p = self.virtual_power
+        if at is not None and not isinstance(at, dict):
+            raise ModelTypeError(f"`at` must be a dict of coordinate -> value, got {at!r:.80}")
         if at:
+            at = {_key(k): as_expr(v, f"`at[{k}]`") for k, v in at.items()}
             hold = {u: sp.Dummy(f"u{i}") for i, u in enumerate(self.independent_speeds)}
             p = p.xreplace(hold).subs(at).xreplace({v: k for k, v in hold.items()})
         p = tidy(p)
@@ -76,6 +79,13 @@ class ForceWork:
         if z is not None:
             return not z
         return True if _numerically_nonzero(p) else None
+
+
+def _key(k: object) -> sp.Basic:
+    """A substitution key of ``does_work(at=...)``: a SymPy object, never a string to parse."""
+    if not isinstance(k, sp.Basic):
+        raise ModelTypeError(f"`at` keys must be coordinates or symbols, got {k!r:.80}")
+    return k
 
 
 def _numerically_nonzero(e: sp.Expr, tries: int = 3) -> bool:

@@ -176,13 +176,19 @@ class FloatDOP853(OdeSolver):
         interval = abs(self.t_bound - self.t)
         if interval == 0.0:
             return 0.0
-        scale = np.array(self.atol) + np.abs(y0) * self.rtol
-        d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
+        scale = np.maximum(np.array(self.atol) + np.abs(y0) * self.rtol, np.finfo(float).tiny)
+        with np.errstate(all="ignore"):  # huge ratios (atol = 1e-300) fall back to a tiny step
+            d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
+        if not (math.isfinite(d0) and math.isfinite(d1)):
+            return min(1e-6, interval, self.max_step)
         h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
         h0 = min(h0, interval)
         y1 = y0 + h0 * self.direction * f0
         f1 = self.fun(self.t + h0 * self.direction, y1)
-        d2 = _rms((f1 - f0) / scale) / h0
+        with np.errstate(all="ignore"):
+            d2 = _rms((f1 - f0) / scale) / h0
+        if not math.isfinite(d2):
+            return min(h0, interval, self.max_step)
         if d1 <= 1e-15 and d2 <= 1e-15:
             h1 = max(1e-6, h0 * 1e-3)
         else:

@@ -158,20 +158,27 @@ class Trajectory:
 
     # ------------------------------------------------------------------ output
     def _columns(self) -> dict[str, np.ndarray]:
-        cols: dict[str, np.ndarray] = {"t": self.t}
-        for j, name in enumerate(self.coordinate_names):
-            cols[name] = self.q[:, j]
-        for j, name in enumerate(self.coordinate_names):
-            cols[f"{name}_dot"] = self.qd[:, j]
-        for j, name in enumerate(self.coordinate_names):
-            cols[f"{name}_ddot"] = self.qdd[:, j]
+        """The CSV columns by name; a name already taken (a coordinate called ``t`` or ``T``,
+        ``x_dot`` beside ``x``) gets a suffix ``~2``, ``~3``, ..., so that no column is lost."""
+        pairs: list[tuple[str, np.ndarray]] = [("t", self.t)]
+        names = self.coordinate_names
+        pairs += [(name, self.q[:, j]) for j, name in enumerate(names)]
+        pairs += [(f"{name}_dot", self.qd[:, j]) for j, name in enumerate(names)]
+        pairs += [(f"{name}_ddot", self.qdd[:, j]) for j, name in enumerate(names)]
+        pairs += [(name, self.multipliers[:, j]) for j, name in enumerate(self.multiplier_names)]
+        pairs += [("T", self.kinetic), ("V", self.potential), ("energy", self.energy)]
+        pairs += [("jacobi", self.jacobi), ("nc_work", self.nc_work)]
+        pairs += [("energy_balance", self.energy_balance)]
         for j, name in enumerate(self.multiplier_names):
-            cols[name] = self.multipliers[:, j]
-        cols.update(T=self.kinetic, V=self.potential, energy=self.energy, jacobi=self.jacobi)
-        cols.update(nc_work=self.nc_work, energy_balance=self.energy_balance)
-        for j, name in enumerate(self.multiplier_names):
-            cols[f"f_{name}"] = self.constraint_residual[:, 0, j]
-            cols[f"g_{name}"] = self.constraint_residual[:, 1, j]
+            pairs += [(f"f_{name}", self.constraint_residual[:, 0, j])]
+            pairs += [(f"g_{name}", self.constraint_residual[:, 1, j])]
+        cols: dict[str, np.ndarray] = {}
+        for name, values in pairs:
+            key, k = name, 1
+            while key in cols:
+                k += 1
+                key = f"{name}~{k}"
+            cols[key] = values
         return cols
 
     def to_csv(self, path: str | Path) -> Path:
