@@ -421,3 +421,37 @@ def test_tiny_atol_is_not_a_crash() -> None:
     assert traj.status in ("success", "failed")
     if traj.status == "success":
         assert np.hypot(*traj.q[-1]) == pytest.approx(1.0, abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    "args", [(3, "a"), (-1, 1.0), (3.5, 1.0), (2**40, 1.0), (3, math.nan), (3, 0.5, 1j), (3, -1.0)]
+)
+def test_ring_state_bad_arguments(args: tuple) -> None:
+    with pytest.raises(ModelError):
+        pfaff.models.ring_state(*args)
+
+
+@pytest.mark.parametrize("t", [math.nan, None, "abc", 1j, [], [[0.1, 0.2]], 2.0, -0.1])
+def test_trajectory_at_bad_times(t: object) -> None:
+    with pytest.raises(StateError, match="`t`"):
+        _traj().at(t)  # type: ignore[arg-type]
+
+
+def test_trajectory_at_is_on_the_rod() -> None:
+    q, qd = _traj().at(0.1)
+    assert np.hypot(*q) == pytest.approx(1.0, abs=1e-12) and q @ qd == pytest.approx(0, abs=1e-10)
+
+
+def test_max_step_that_would_never_end() -> None:
+    with pytest.raises(OptionError, match=r"`max_step`.*steps"):
+        pfaff.simulate(_pendulum(), [1.0, 0.0], [0.0, 0.0], (0.0, 1.0), max_step=1e-300)
+
+
+def test_projecting_from_a_singular_configuration() -> None:
+    with pytest.raises(StateError, match="could not be projected"):
+        pfaff.simulate(_pendulum(), [0.0, 0.0], [0.0, 0.0], (0.0, 1.0), project_initial=True)
+
+
+def test_ida_far_from_zero_is_a_failed_run() -> None:
+    traj = pfaff.simulate(_pendulum(), [1.0, 0.0], [0.0, 0.0], (1e16, 1e16 + 4), method="ida")
+    assert traj.status == "failed" and "t = " in traj.message

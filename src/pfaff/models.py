@@ -8,6 +8,7 @@ made by a user compares equal to them.
 from __future__ import annotations
 
 import keyword
+import math
 
 import numpy as np
 import sympy as sp
@@ -128,6 +129,28 @@ def _ring_family(
     return ring
 
 
+def _real(value: object, name: str) -> float:
+    """A finite real number (a model value), else a :class:`ModelError` naming it."""
+    if isinstance(value, bool | str | bytes | complex) or np.ndim(value) != 0:
+        raise ModelTypeError(f"`{name}` must be a real number, got {value!r:.80}")
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ModelTypeError(f"`{name}` must be a real number, got {value!r:.80}") from None
+    if not math.isfinite(v):
+        raise ModelError(f"`{name}` must be finite, got {v}")
+    return v
+
+
+def _count(value: object, name: str) -> int:
+    """A number of particles: a whole number from 2 to 2^31 - 1."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise ModelTypeError(f"`{name}` must be a whole number, got {value!r:.80}")
+    if not 2 <= int(value) < 2**31:
+        raise ModelError(f"`{name}` must be between 2 and 2^31 - 1, got {value}")
+    return int(value)
+
+
 def ring_state(
     n: int, radius: float, theta: float = 0.0, theta_dot: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -143,6 +166,13 @@ def ring_state(
     >>> q.shape, float(qd[0])
     ((5,), 0.5)
     """
+    n = _count(n, "n")
+    radius, theta, theta_dot = (
+        _real(v, name)
+        for v, name in ((radius, "radius"), (theta, "theta"), (theta_dot, "theta_dot"))
+    )
+    if radius <= 0:
+        raise ModelError(f"`radius` must be positive, got {radius}")
     th = theta + 2 * np.pi * np.arange(n) / n
     q = np.concatenate([[radius * theta], th])
     qd = np.concatenate([[radius * theta_dot], np.full(n, float(theta_dot))])

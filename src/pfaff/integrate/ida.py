@@ -73,7 +73,7 @@ class IDAStepper:
         self.t_end = t_end
         self._span = abs(t_end - t0)
         self._tiny_count = 0
-        res = self.solver.init_step(t0, y0, yp0)
+        res = self._call(self.solver.init_step, t0, y0, yp0)
         self._check(res)
         self._last = res
         self.stats = {"steps": 0, "rejected": None, "nfev": 0, "njev": 0}
@@ -166,6 +166,18 @@ class IDAStepper:
             (float(b.t), b.y[:n2].copy(), b.yp[:n2].copy()),
         )
 
+    @staticmethod
+    def _call(fn: Callable, *args: object, **kw: object) -> Any:
+        """A call into scikit-sundae; its unmapped SUNDIALS return codes (a KeyError such as -60
+        at times where the step size underflows) become a failure of the run."""
+        try:
+            return fn(*args, **kw)
+        except KeyError as e:
+            raise PfaffError(
+                f"IDA stopped with SUNDIALS return code {e.args[0] if e.args else '?'} (the "
+                "time span may be too far from 0 for its step sizes, or the tolerances too tight)"
+            ) from None
+
     def step_work(self, power: Callable[[float, np.ndarray, np.ndarray], float]) -> float:
         """∫ P dt over the last internal step (see :func:`pfaff.integrate.work.hermite_work`)."""
         ends = self.endpoints()
@@ -180,7 +192,7 @@ class IDAStepper:
 
     def step(self) -> None:
         t_before = self.t
-        res = self.solver.step(self.t_end, method="onestep", tstop=self.t_end)
+        res = self._call(self.solver.step, self.t_end, method="onestep", tstop=self.t_end)
         self._check(res)
         self._previous, self._last = self._last, res
         # a step that hardly moves t against its own size (a few thousand ulps) counts as stalled
@@ -201,7 +213,7 @@ class IDAStepper:
         """IDA's own interpolation inside the last internal step."""
         out = []
         for ti in ts:
-            r = self.solver.step(float(ti), method="normal", tstop=self.t_end)
+            r = self._call(self.solver.step, float(ti), method="normal", tstop=self.t_end)
             self._check(r)
             out.append((r.y[: self.n].copy(), r.y[self.n : 2 * self.n].copy()))
         return out

@@ -77,6 +77,9 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
     return te
 
 
+MAX_STEPS = 1e9  # a max_step that forces more steps than this is refused (it would not end)
+
+
 def _options(method: str, kw: dict, span: tuple[float, float]) -> dict:
     """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
     if not isinstance(method, str) or method not in METHODS:
@@ -93,6 +96,11 @@ def _options(method: str, kw: dict, span: tuple[float, float]) -> dict:
         if not v > 0:
             raise OptionError(f"`max_step` must be positive (or None: no limit); got {v:g}")
         kw["max_step"] = v if math.isfinite(v) else None  # +inf: no limit
+        if math.isfinite(v) and (span[1] - span[0]) / v > MAX_STEPS:
+            raise OptionError(
+                f"`max_step` = {v:g} would take more than {MAX_STEPS:.0e} steps over t_span "
+                f"(length {span[1] - span[0]:g}): choose a larger max_step or a shorter span"
+            )
     if kw["first_step"] is not None:
         v, length = _real(kw["first_step"], "first_step"), span[1] - span[0]
         if not (0 < v <= length):
@@ -147,7 +155,16 @@ def initial_state(
             f"`{model.constraint_names[i]}`). Use pfaff.consistent_state to complete a state from "
             "independent coordinates, or pass project_initial=True to project it"
         )
-    q, qd, _ = projector(t0, q, qd)
+    try:
+        with np.errstate(all="ignore"):
+            q, qd, _ = projector(t0, q, qd)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):  # NaN from a singular A
+        q = qd = np.full(model.n, np.nan)
+    if not (np.isfinite(q).all() and np.isfinite(qd).all()):
+        raise StateError(
+            "the initial state could not be projected onto the constraints: the constraint "
+            "Jacobian is singular there (e.g. a pendulum bob at its pivot); start elsewhere"
+        )
     if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
         raise StateError("the initial state could not be projected onto the constraints")
     if hasattr(model, "check_determined"):

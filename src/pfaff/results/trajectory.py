@@ -137,8 +137,22 @@ class Trajectory:
         -------
         q, qd : ndarray, shape (n,) or (k, n)
         """
-        ts = np.atleast_1d(np.asarray(t, dtype=float))
-        if len(self.t) < 2 or ts.min() < self.t[0] or ts.max() > self.t[-1]:
+        if len(self.t) < 2:
+            raise StateError(
+                f"`at` needs a run of at least two reported times; this one has {len(self.t)}"
+            )
+        if isinstance(t, str | bytes | bool) or t is None:
+            raise StateError(f"`t` must be a time or an array of times, got {t!r:.80}")
+        try:
+            raw = np.asarray(t)
+            if raw.dtype.kind not in "iuf" or raw.ndim > 1 or raw.size == 0:
+                raise TypeError
+            ts = np.atleast_1d(raw.astype(float))
+        except (TypeError, ValueError):
+            raise StateError(
+                f"`t` must be a real time or a non-empty 1-D array of times, got {t!r:.80}"
+            ) from None
+        if not np.isfinite(ts).all() or ts.min() < self.t[0] or ts.max() > self.t[-1]:
             raise StateError(
                 f"`t` must lie inside the simulated span [{self.t[0]:g}, {self.t[-1]:g}]"
             )
