@@ -438,3 +438,14 @@ def test_bad_time_named(t: object, problem: str) -> None:
         model.accelerations(t, [1.0, 0.0], [0.0, 0.0])
     with pytest.raises(StateError, match=rf"`t`.*{problem}"):
         pfaff.consistent_state(model, [1.0, 0.0], [0.0, 0.0], ["x"], t=t)
+
+
+def test_inertia_check_is_independent_of_units() -> None:
+    """1 µg beside 1000 kg (ratio 1e-12) is a well-posed system: q̈ = −V'(q)/m for each."""
+    x, y = pfaff.coordinates("x y")
+    s = pfaff.System([x, y])
+    s.add_particle(1e-12, [x, 0])
+    s.add_particle(1.0, [0, y])
+    s.add_potential_energy(1e-12 * x**2 + y**2)
+    qdd, _ = s.equations().compile({}).accelerations(0.0, [0.3, 0.1], [0.0, 0.0])
+    np.testing.assert_allclose(qdd, [-0.6, -0.2], rtol=1e-12)

@@ -554,9 +554,14 @@ class NumericModel:
         largest diagonal entry; a singular M passes LAPACK's test with pivots of rounding size.
         """
         n = self.n
-        M, A = K[:n, :n], K[n:, :n]
         if not np.isfinite(K).all():
             return False  # NaN or infinity: a StateError of the solve, not a question of inertia
+        # Jacobi scaling (velocities u = D q̇, D = √diag M): the test is then independent of the
+        # units, so 1 µg beside 1000 kg is not "no inertia"; a zero diagonal stays unscaled
+        diag = np.diag(K[:n, :n]).copy()
+        d = np.where(diag > 1e-300, np.sqrt(np.abs(diag)), 1.0)
+        M = K[:n, :n] / d[:, None] / d[None, :]
+        A = K[n:, :n] / d[None, :]
         U, info = _potrf(M)
         if info == 0 and np.diag(U).min() ** 2 > M_PIVOT * np.diag(M).max():
             return False  # positive definite: so is ZᵀMZ
@@ -569,7 +574,7 @@ class NumericModel:
         bad = w <= tol
         if not bad.any():
             return True
-        U = np.abs(Z @ V[:, bad])  # the offending directions in coordinates
+        U = np.abs((Z @ V[:, bad]) / d[:, None])  # the offending directions in coordinates
         coords = np.flatnonzero((U >= 1e-6 * U.max(axis=0)).any(axis=1))
         if (w[bad] < -tol).any():
             raise InertiaError(
