@@ -8,7 +8,6 @@ made by a user compares equal to them.
 from __future__ import annotations
 
 import keyword
-import math
 
 import numpy as np
 import sympy as sp
@@ -16,6 +15,7 @@ import sympy as sp
 from pfaff.api import System
 from pfaff.core.errors import ModelError, ModelTypeError
 from pfaff.core.symbols import as_expr, coordinates
+from pfaff.numeric.checks import real_number
 
 FAMILY_FROM = 1024  # rolling_ring(n) uses the family form above this n unless told otherwise
 
@@ -77,9 +77,7 @@ def rolling_ring(
     >>> [str(p) for p in ring.parameters]
     ['F', 'M', 'r']
     """
-    if not isinstance(n, int | np.integer) or n < 2:
-        raise ModelError(f"`n` must be an integer >= 2 (number of particles), got {n!r}")
-    n = int(n)
+    n = _count(n, "n")
     if family or (family is None and n > FAMILY_FROM):
         return _ring_family(n, mass, radius, force, incline, gravity)
     M, r = _param(mass, "M", "mass"), _param(radius, "r", "radius")
@@ -129,19 +127,6 @@ def _ring_family(
     return ring
 
 
-def _real(value: object, name: str) -> float:
-    """A finite real number (a model value), else a :class:`ModelError` naming it."""
-    if isinstance(value, bool | str | bytes | complex) or np.ndim(value) != 0:
-        raise ModelTypeError(f"`{name}` must be a real number, got {value!r:.80}")
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ModelTypeError(f"`{name}` must be a real number, got {value!r:.80}") from None
-    if not math.isfinite(v):
-        raise ModelError(f"`{name}` must be finite, got {v}")
-    return v
-
-
 def _count(value: object, name: str) -> int:
     """A number of particles: a whole number from 2 to 2^31 - 1."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
@@ -168,7 +153,7 @@ def ring_state(
     """
     n = _count(n, "n")
     radius, theta, theta_dot = (
-        _real(v, name)
+        real_number(v, name, ModelError)
         for v, name in ((radius, "radius"), (theta, "theta"), (theta_dot, "theta_dot"))
     )
     if radius <= 0:

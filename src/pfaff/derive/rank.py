@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError
 from pfaff.derive.compile import build_model
@@ -53,8 +54,7 @@ def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> None:
         else:
             model = build_model(eom, values, constraints_only=True)
         A = model.constraint_matrix(tt, q)
-    data = A.data if hasattr(A, "data") and not isinstance(A, np.ndarray) else A
-    if not np.all(np.isfinite(data)):
+    if not np.all(np.isfinite(A.data if sps.issparse(A) else A)):
         return  # a singular random point; the numeric solve will report real problems
     rank, rows = dependent_rows(A)
     if rows.size:

@@ -13,11 +13,12 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ModelTypeError, StateError
+from pfaff.core.errors import ModelTypeError, PfaffError, StateError
 
 
-def real_number(value: object, arg: str) -> float:
-    """``value`` as a finite real float, else a :class:`StateError` naming ``arg``.
+def real_number(value: object, arg: str, error: type[PfaffError] = StateError) -> float:
+    """``value`` as a finite real float, else ``error`` (a :class:`StateError` by default)
+    naming ``arg``.
 
     Strings, booleans, complex numbers and arrays of more than one number are refused, not
     converted (``float("1")``, ``float(True)`` and NumPy's complex-to-real cast would pass them).
@@ -26,15 +27,15 @@ def real_number(value: object, arg: str) -> float:
         v = float(value)
     else:
         if isinstance(value, str | bytes | bool | np.bool_) or np.ndim(value) != 0:
-            raise StateError(f"`{arg}` must be a real number; got {value!r:.80}")
+            raise error(f"`{arg}` must be a real number; got {value!r:.80}")
         if np.iscomplexobj(value) or isinstance(value, complex):
-            raise StateError(f"`{arg}` must be a real number; got the complex value {value!r:.80}")
+            raise error(f"`{arg}` must be a real number; got the complex value {value!r:.80}")
         try:
             v = float(value)  # type: ignore[arg-type]
         except (TypeError, ValueError):
-            raise StateError(f"`{arg}` must be a real number; got {value!r:.80}") from None
+            raise error(f"`{arg}` must be a real number; got {value!r:.80}") from None
     if not math.isfinite(v):
-        raise StateError(f"`{arg}` is not finite ({v})")
+        raise error(f"`{arg}` is not finite ({v})")
     return v
 
 
