@@ -140,10 +140,43 @@ def initial_state(
     """
     names = model.coordinate_names if isinstance(model.coordinate_names, list) else None
     t0, q, qd = check_state(t0, q0, qd0, model.n, names, ("t0", "q0", "qd0"))
-    if model.m == 0:
-        if hasattr(model, "check_determined"):
-            model.check_determined(t0, q, qd)
-        return q, qd
+    if model.m:
+        q, qd = _onto_constraints(model, t0, q, qd, projector, opts)
+    if hasattr(model, "check_determined"):
+        model.check_determined(t0, q, qd)
+    if model.m and hasattr(model, "_row_scales"):
+        model._solve_accelerations(t0, q, qd)  # raises if no q̈ satisfies the constraints here
+    return q, qd
+
+
+def _onto_constraints(
+    model: Any, t0: float, q: np.ndarray, qd: np.ndarray, projector: Projector, opts: dict
+) -> tuple[np.ndarray, np.ndarray]:
+    """The initial state polished onto the constraints, or refused with its residual."""
+    f, g = residuals(model, t0, q, qd)
+    f = np.where(projector.holonomic, f, 0.0)
+    worst = max(np.abs(f).max(), np.abs(g).max())
+    if worst > opts["initial_tol"] and not opts["project_initial"]:
+        i = int(np.argmax(np.maximum(np.abs(f), np.abs(g))))
+        raise StateError(
+            f"the initial state is off the constraint manifold: max |f| = {np.abs(f).max():.3g}, "
+            f"max |A q̇ + b| = {np.abs(g).max():.3g} (worst: constraint "
+            f"`{model.constraint_names[i]}`). Use pfaff.consistent_state to complete a state from "
+            "independent coordinates, or pass project_initial=True to project it"
+        )
+    try:
+        with np.errstate(all="ignore"):
+            q, qd, _ = projector(t0, q, qd)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):  # NaN from a singular A
+        q = qd = np.full(model.n, np.nan)
+    if not (np.isfinite(q).all() and np.isfinite(qd).all()):
+        raise StateError(
+            "the initial state could not be projected onto the constraints: the constraint "
+            "Jacobian is singular there (e.g. a pendulum bob at its pivot); start elsewhere"
+        )
+    if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
+        raise StateError("the initial state could not be projected onto the constraints")
+    return q, qd
     f, g = residuals(model, t0, q, qd)
     f = np.where(projector.holonomic, f, 0.0)
     worst = max(np.abs(f).max(), np.abs(g).max())
@@ -391,10 +424,7 @@ class _Run:
             if not raised_in_generated_code(e):  # a bug in pfaff: surface it as one
                 raise
             # a math domain error, overflow or division by zero in the user's equations
-            status, message = (
-                "failed",
-                f"failed at t = {st.t:.17g}: the equations are not defined there ({e})",
-            )
+            status, message = "failed", f"failed at t = {st.t:.17g}: {undefined_at(e, st.t)}"
         finally:
             self.cpu = time.process_time() - start
             if bar is not None:
