@@ -8,8 +8,8 @@ import sympy as sp
 
 import pfaff
 from conftest import F, M, on_ring_manifold, r
+from pfaff.cli.backsub import multipliers_by_back_substitution
 from pfaff.derive.reduce import tidy
-from pfaff.numeric.backsub import multipliers_by_back_substitution
 
 t = pfaff.t
 

@@ -20,6 +20,7 @@ from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
 import pfaff
+from pfaff.numeric.protocol import OdeFunction
 
 METHODS = ("projection", "baumgarte", "ida")
 MASS, LENGTH, G = 0.7, 1.0, 9.81
@@ -464,19 +465,18 @@ def test_stats(pend: pfaff.NumericModel, method: str) -> None:
 
 # ---------------------------------------------------------------------------------- 12. Ctrl-C
 def test_keyboard_interrupt_keeps_points(pend: pfaff.NumericModel, monkeypatch) -> None:
-    original = pend._ode_function
+    original = pend.ode_function
 
-    def interrupted(*args):
-        fun, calls = original(*args), itertools.count()
+    class Interrupted(OdeFunction):  # the array path: FloatDOP853 is not used without on_lists
+        def __init__(self, *args, **kw) -> None:
+            self.fun, self.calls = original(*args, **kw), itertools.count()
 
-        def wrapped(t: float, y: np.ndarray) -> np.ndarray:
-            if next(calls) >= 600:
+        def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+            if next(self.calls) >= 600:
                 raise KeyboardInterrupt
-            return fun(t, y)
+            return self.fun(t, y)
 
-        return wrapped
-
-    monkeypatch.setattr(pend, "_ode_function", interrupted)
+    monkeypatch.setattr(pend, "ode_function", Interrupted)
     traj = pfaff.simulate(pend, Q0, QD0, (0.0, 100.0))
     assert traj.status == "interrupted" and not traj.success
     assert "interrupted" in traj.message
@@ -486,14 +486,14 @@ def test_keyboard_interrupt_keeps_points(pend: pfaff.NumericModel, monkeypatch) 
 
 
 def test_keyboard_interrupt_ida(pend: pfaff.NumericModel, monkeypatch) -> None:
-    original, calls = pend._kkt, itertools.count()
+    original, calls = pend.dae_blocks, itertools.count()
 
-    def kkt(*args):
+    def blocks(*args):
         if next(calls) >= 400:
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(pend, "_kkt", kkt)
+    monkeypatch.setattr(pend, "dae_blocks", blocks)
     traj = pfaff.simulate(pend, Q0, QD0, (0.0, 100.0), method="ida")
     assert traj.status == "interrupted"
     assert 1 < len(traj) and traj.t[-1] < 100.0

@@ -185,23 +185,26 @@ def test_nonfinite_midrun_fails_with_time() -> None:
 
 
 def test_ctrl_c_returns_partial(pendulum, monkeypatch) -> None:
-    from pfaff.integrate import integrators
+    from pfaff.numeric.protocol import OdeFunction
 
     calls = {"n": 0}
-    real = integrators.acceleration_field
+    real = pendulum.ode_function
 
-    def interrupting(model, alpha=0.0, beta=0.0, start=None):
-        fun = real(model, alpha, beta, start)
+    class Interrupting(OdeFunction):
+        def __init__(self, *args, **kw) -> None:
+            self.fun = real(*args, **kw)
+            self.on_lists = self._lists if self.fun.on_lists is not None else None
 
-        def wrapped(t, y):
+        def _lists(self, t, y):
             calls["n"] += 1
             if calls["n"] > 400:
                 raise KeyboardInterrupt
-            return fun(t, y)
+            return self.fun.on_lists(t, y)
 
-        return wrapped
+        def __call__(self, t, y):
+            return np.array(self._lists(t, y.tolist())) if self.on_lists else self.fun(t, y)
 
-    monkeypatch.setattr(integrators, "acceleration_field", interrupting)
+    monkeypatch.setattr(pendulum, "ode_function", Interrupting)
     traj = pfaff.simulate(pendulum, [L, 0.0], [0.0, 0.0], (0, 50))
     assert traj.status == "interrupted" and len(traj.t) > 5 and traj.t[-1] < 50
     assert np.abs(traj.position_residual).max() <= 1e-10

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from pfaff.core.errors import ModelError
+from pfaff.core.errors import ModelError, OptionError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.equations import Derivation, Solution
+from pfaff.numeric.model import SOLVERS as GENERAL_SOLVERS
 from pfaff.numeric.model import NumericModel
+from pfaff.numeric.structured import SOLVERS as STRUCTURED_SOLVERS
 from pfaff.numeric.structured import StructuredModel
 
 __all__ = ["EquationsOfMotion", "Solution"]
@@ -55,7 +57,9 @@ class EquationsOfMotion(Derivation):
     Eq(g*m + m*Derivative(y(t), (t, 2)), 2*lambda1*y(t))
     """
 
-    def compile(self, parameters: dict | None = None) -> NumericModel | StructuredModel:
+    def compile(
+        self, parameters: dict | None = None, *, solver: str | None = None
+    ) -> NumericModel | StructuredModel:
         """Compile to a numeric model with the given parameter values.
 
         A model with families compiles to a :class:`pfaff.numeric.structured.StructuredModel`
@@ -66,6 +70,11 @@ class EquationsOfMotion(Derivation):
         ----------
         parameters : dict
             Value for every symbol in :attr:`parameters`, keyed by Symbol or by name.
+        solver : str, optional
+            The KKT solver (:mod:`pfaff.numeric.kkt`). General models: ``"range-space"`` (the
+            default up to 400 unknowns, with the rank-loss floor), ``"lu"`` or ``"sparse"`` (the
+            default above). Models with families: ``"triangular"`` (the default where the
+            constraints have that structure) or ``"sparse"``.
 
         Examples
         --------
@@ -81,6 +90,12 @@ class EquationsOfMotion(Derivation):
                 "they cannot be compiled; give `solutions` for the dependent coordinates to "
                 "System.reduce, or compile the full equations"
             )
+        kinds = STRUCTURED_SOLVERS if self.family else GENERAL_SOLVERS
+        if solver is not None and solver not in kinds:
+            kind = "with families" if self.family else "without families"
+            raise OptionError(
+                f"`solver` of a model {kind} must be one of {', '.join(kinds)}; got {solver!r:.80}"
+            )
         if self.family:
-            return compile_structured(self, parameters or {})
-        return compile_equations(self, parameters or {})
+            return compile_structured(self, parameters or {}, solver=solver)
+        return compile_equations(self, parameters or {}, solver=solver)

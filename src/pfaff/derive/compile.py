@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -21,7 +20,6 @@ from pfaff.derive.codegen import (
     power_exprs,
 )
 from pfaff.derive.fused import build_fused
-from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.model import ConstraintPart, DynamicsPart, NumericModel
 
 if TYPE_CHECKING:
@@ -160,9 +158,17 @@ def constraint_part(block: Block, params: tuple) -> ConstraintPart:
 
 
 def build_model(
-    eom: Derivation, values: list[float], *, constraints_only: bool = False
+    eom: Derivation,
+    values: list[float],
+    *,
+    constraints_only: bool = False,
+    solver: str | None = None,
 ) -> NumericModel:
-    """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values."""
+    """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values.
+
+    Small systems also get the fused scalar kernel (:mod:`pfaff.derive.fused`), which the model
+    takes only if it agrees with the template kernels (:meth:`NumericModel.use_fused`).
+    """
     params = tuple(eom.parameters)
     dyn = (
         []
@@ -177,49 +183,19 @@ def build_model(
         "holonomic_rows": np.array(eom.holonomic, dtype=bool),
         "parameters": {p.name: v for p, v in zip(params, values, strict=True)},
     }
-    model = NumericModel(eom.n, dyn, con, eom.m, values, names)
-    if not constraints_only:
-        model._fused = checked_fused(eom, model)
+    model = NumericModel(eom.n, dyn, con, eom.m, values, names, solver=solver)
+    if not constraints_only and model.solver == "range-space":
+        try:
+            fused = build_fused(eom)
+        except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
+            fused = None
+        if fused is not None:
+            model.use_fused(fused)
     return model
 
 
-def checked_fused(eom: Derivation, model: NumericModel) -> FusedKernel | None:
-    """The fused kernel of a small system, if it agrees with the template kernels at a test state."""
-    try:
-        fused = build_fused(eom)
-    except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
-        return None
-    if fused is None:
-        return None
-    rng = np.random.default_rng(7)
-    t0, q, qd = 0.3, rng.uniform(0.2, 0.9, model.n), rng.uniform(-0.5, 0.5, model.n)
-    try:
-        ref = model._kkt(t0, q, qd)
-        model._fused = fused
-        new = model._kkt(t0, q, qd)
-    except Exception:
-        return None
-    finally:
-        model._fused = None
-    for a, b in zip(ref, new, strict=True):
-        if not np.allclose(a, b, rtol=1e-9, atol=1e-12 * (1 + np.max(np.abs(a), initial=0))):
-            return None
-    if fused.rfn is not None and not _rhs_agrees(fused, model, t0, q, qd):
-        fused = dataclasses.replace(fused, rfn=None)
-    return fused
-
-
-def _rhs_agrees(fused: FusedKernel, model: NumericModel, t0: float, q, qd) -> bool:
-    """The one-function right-hand side against kernel + Schur solve at the test state."""
-    p, taus, y = (*model._p, 0.0, 0.0), [0.0] * (model.m + 1), [*q.tolist(), *qd.tolist()]
-    try:
-        slow = fused.sfn(*fused.ofn(t0, *y, *p), *taus)
-        fast = fused.rfn(*p, *taus, lambda t, y: None)(t0, y)
-    except Exception:  # anything wrong here: do not use the fast function
-        return False
-    return fast is not None and np.allclose(fast, y[model.n :] + slow, rtol=1e-12, atol=1e-14)
-
-
-def compile_equations(eom: Derivation, parameters: dict) -> NumericModel:
+def compile_equations(
+    eom: Derivation, parameters: dict, *, solver: str | None = None
+) -> NumericModel:
     """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
-    return build_model(eom, model_parameter_values(eom, parameters))
+    return build_model(eom, model_parameter_values(eom, parameters), solver=solver)

@@ -69,9 +69,7 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     )
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
-    kfn, ofn, rfn = _kkt_function(plain, mass, acon, n, m, args, qds)
-    sfn = schur_solver(n, m, mass, acon, floor=True)
-    qfn = _projection_function(plain, mass, acon, n, m, args, qds)
+    rfn = _rhs_function(plain, mass, acon, n, m, args, qds)
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
     index, source = [], []
@@ -81,36 +79,29 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     for s, (i, j) in enumerate(acon, start=len(mass)):
         index += [(n + i) * N + j, j * N + n + i]
         source += [s, s]
+    entries = [i * N + j for i, j in mass] + [(n + i) * N + j for i, j in acon]
     off = len(mass) + len(acon)
     return FusedKernel(
         fn,
         vfn,
         efn,
-        kfn,
-        ofn,
-        sfn,
         rfn,
-        qfn,
         cfn,
         np.array(index, dtype=np.int64),
         np.array(source, dtype=np.int64),
+        np.array(entries, dtype=np.int64),
         (off, off + n, off + n + m, off + n + 2 * m),
-        tuple(i for i, _ in acon),
     )
 
 
-def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list):
-    """Generate ``kfn`` (see :class:`FusedKernel`) from the plain output expressions."""
-    N = n + m
-    K = [[sp.S.Zero] * N for _ in range(N)]
-    for s, (i, j) in enumerate(mass):
-        K[i][j] = K[j][i] = plain[s]
+def _rhs_function(
+    plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list
+) -> Callable | None:
+    """``rfn`` (see :class:`FusedKernel`) from the plain output expressions, or None."""
     g = [sp.S.Zero] * m
     for s, (i, j) in enumerate(acon, start=len(mass)):
-        K[n + i][j] = K[j][n + i] = plain[s]
         g[i] += plain[s] * qds[j]
     off = len(mass) + len(acon)
-    forcing = plain[off : off + n]
     neg_bias = plain[off + n : off + n + m]
     b, f = plain[off + n + m : off + n + 2 * m], plain[off + n + 2 * m :]
     alpha, beta = sp.Symbol("_alpha"), sp.Symbol("_beta")
@@ -118,17 +109,10 @@ def _kkt_function(plain: list, mass: list, acon: list, n: int, m: int, args: lis
         nb - 2 * alpha * (gi + bi) - beta**2 * fi
         for nb, gi, bi, fi in zip(neg_bias, g, b, f, strict=True)
     ]
-    kfn = sp.lambdify(
-        [*args, alpha, beta], [K, forcing + c], modules="math", cse=True, docstring_limit=0
-    )
-    ofn = sp.lambdify(
-        [*args, alpha, beta], plain[: off + n] + c, modules="math", cse=True, docstring_limit=0
-    )
     try:
-        rfn = _rhs_factory(plain[: off + n] + c, mass, acon, n, m, args, (alpha, beta))
-    except Exception:  # something the printer cannot write: the two-call path
-        rfn = None
-    return kfn, ofn, rfn
+        return _rhs_factory(plain[: off + n] + c, mass, acon, n, m, args, (alpha, beta))
+    except Exception:  # something the printer cannot write: the array path
+        return None
 
 
 def _rhs_factory(
@@ -167,16 +151,3 @@ def _rhs_factory(
     namespace = {**NAMESPACE, "math": math}
     exec(compile(src + "\n", "<pfaff.fused rhs>", "exec"), namespace)  # our own generated code
     return namespace["make"]
-
-
-def _projection_function(
-    plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list
-) -> Callable:
-    """Generate ``qfn`` (see :class:`FusedKernel`)."""
-    nA = len(mass) + len(acon)
-    A = [[sp.S.Zero] * n for _ in range(m)]
-    for s, (i, j) in enumerate(acon, start=len(mass)):
-        A[i][j] = plain[s]
-    b, f = plain[nA + n + m : nA + n + 2 * m], plain[nA + n + 2 * m :]
-    g = [sum((A[i][j] * qds[j] for j in range(n)), b[i]) for i in range(m)]
-    return sp.lambdify(args, plain[:nA] + list(f) + g, modules="math", cse=True, docstring_limit=0)

@@ -22,10 +22,12 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sps
 
 from pfaff.core.errors import PfaffError
-from pfaff.integrate.projection import diagonal_weights
 from pfaff.integrate.work import hermite_work
+from pfaff.numeric.projection import diagonal_weights
+from pfaff.numeric.protocol import DynamicsModel
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 REGULARIZATION = 1e-8  # ε / (max diag A M⁻¹Aᵀ / cj) on the algebraic diagonal
@@ -39,13 +41,11 @@ FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite dif
 class IDAStepper:
     """IDA driven one internal step at a time (same contract as the Runge–Kutta steppers)."""
 
-    def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+    def __init__(self, model: DynamicsModel, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
         try:
             from sksundae.ida import IDA
         except ImportError as e:  # pragma: no cover - a declared dependency
             raise PfaffError("method 'ida' needs scikit-sundae (pip install scikit-sundae)") from e
-        if model.m and not hasattr(model, "_kkt"):
-            raise PfaffError("method 'ida' needs a model with dense or sparse KKT matrices")
         self.model = model
         n, m = model.n, model.m
         self.hrows = np.flatnonzero(model.holonomic)
@@ -67,7 +67,7 @@ class IDAStepper:
             max_num_steps=1_000_000,
             **kw,
         )
-        qdd0, lam0 = model._solve_accelerations(t0, q0, qd0)
+        qdd0, lam0 = model.solve(t0, q0, qd0)
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
         self.t_end = t_end
@@ -87,10 +87,10 @@ class IDAStepper:
     def _blocks(self, t: float, y: np.ndarray) -> tuple:
         n = self.n
         q, v = y[:n], y[n : 2 * n]
-        K, forcing, _, _, f, g = self.model._kkt(t, q, v)
-        if hasattr(K, "toarray"):
-            K = K.toarray()
-        return K[:n, :n], K[n:, :n], forcing, f, g
+        M, A, forcing, f, g = self.model.dae_blocks(t, q, v)
+        if sps.issparse(M):
+            M, A = M.toarray(), A.toarray()
+        return M, A, forcing, f, g
 
     def _residual(self, t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray) -> None:
         n, m = self.n, self.m

@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
 
 import numpy as np
+import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError, OptionError, StateError
-from pfaff.integrate.projection import residuals
 from pfaff.numeric.checks import check_model, check_state
+from pfaff.numeric.projection import newton_projection
+from pfaff.numeric.protocol import ConstraintLinearization, DynamicsModel
 
 
-def _indices(model: Any, independent: Sequence[int | str]) -> np.ndarray:
+def _indices(model: DynamicsModel, independent: Sequence[int | str]) -> np.ndarray:
     names = list(model.coordinate_names)
     out = []
     if isinstance(independent, str | bytes) or not hasattr(independent, "__iter__"):
@@ -39,12 +40,12 @@ def _indices(model: Any, independent: Sequence[int | str]) -> np.ndarray:
     return np.array(sorted(out), dtype=np.int64)
 
 
-def _dense(A: Any) -> np.ndarray:
-    return A.toarray() if hasattr(A, "toarray") else np.asarray(A)
+def _dense(A: np.ndarray | sps.spmatrix) -> np.ndarray:
+    return A.toarray() if sps.issparse(A) else np.asarray(A)
 
 
 def consistent_state(
-    model: Any,
+    model: DynamicsModel,
     q: Sequence[float] | np.ndarray,
     qd: Sequence[float] | np.ndarray,
     independent: Sequence[int | str],
@@ -57,7 +58,9 @@ def consistent_state(
 
     The entries of ``q`` and ``qd`` at ``independent`` are kept; the others are starting guesses.
     Dependent coordinates solve f(q, t) = 0 by Gauss–Newton (least squares on the dependent
-    columns of A), dependent speeds solve A q̇ + b = 0.
+    columns of A), dependent speeds solve A q̇ + b = 0: the projection of
+    :mod:`pfaff.numeric.projection` (its iteration policy: it stops when the residual stops
+    falling) in the Euclidean metric, with the independent coordinates held.
 
     Parameters
     ----------
@@ -96,19 +99,29 @@ def consistent_state(
     ind = _indices(model, independent)
     dep = np.setdiff1d(np.arange(model.n), ind)
     hol = np.asarray(model.holonomic, dtype=bool)
-    q, qd = q.copy(), qd.copy()
-    f = np.where(hol, residuals(model, t, q, qd)[0], 0.0)
-    for _ in range(max_iter):
-        if np.abs(f).max(initial=0.0) <= tol:
-            break
-        A = _dense(model.constraint_matrix(t, q))[hol][:, dep]
-        q[dep] -= np.linalg.lstsq(A, f[hol], rcond=None)[0]
-        f = np.where(hol, residuals(model, t, q, qd)[0], 0.0)
-    A = _dense(model.constraint_matrix(t, q))
-    g = residuals(model, t, q, qd)[1]
-    if dep.size and model.m:
-        qd[dep] -= np.linalg.lstsq(A[:, dep], g, rcond=None)[0]
-    f, g = residuals(model, t, q, qd)
+
+    def held(Ad: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+        def correct(r: np.ndarray) -> np.ndarray:
+            out = np.zeros(model.n)
+            if dep.size and Ad.shape[0]:
+                out[dep] = np.linalg.lstsq(Ad, r, rcond=None)[0]
+            return out
+
+        return correct
+
+    def linearize(q_: np.ndarray, qd_: np.ndarray) -> ConstraintLinearization:
+        f, g = model.residual(t, q_, qd_)
+        A = _dense(model.constraint_matrix(t, q_))
+        pos, vel = held(A[hol][:, dep]), held(A[:, dep])
+        return ConstraintLinearization(
+            f, g, np.sqrt((A * A).sum(axis=1)), lambda r: pos(r[hol]), vel
+        )
+
+    q, qd, _ = newton_projection(
+        linearize, lambda q_, qd_: model.residual(t, q_, qd_), q, qd, hol,
+        tol=tol, max_iter=max_iter,
+    )  # fmt: skip
+    f, g = model.residual(t, q, qd)
     worst = max(np.abs(np.where(hol, f, 0.0)).max(initial=0.0), np.abs(g).max(initial=0.0))
     if not np.isfinite(worst) or worst > max(tol, 1e-9):
         raise ConstraintError(

@@ -4,7 +4,7 @@ Two separate ideas share one stepping contract (``t``, ``state()``, ``step()``, 
 ``stats``):
 
 - :class:`ProjectedRK` ("projection") integrates q̈ = q̈(q, q̇, t) from the KKT solve and, after
-  every accepted step, projects the state back onto f = 0, A q̇ + b = 0 (:mod:`pfaff.integrate.projection`);
+  every accepted step, projects the state back onto f = 0, A q̇ + b = 0 (:mod:`pfaff.numeric.projection`);
   the Runge–Kutta method restarts from the projected state.
 - :class:`BaumgarteRK` ("baumgarte") changes the vector field instead: the constraint rows of the
   KKT system ask for A q̈ + Ȧq̇ + ḃ = −2α (A q̇ + b) − β² f, so that the drift obeys a damped
@@ -16,69 +16,17 @@ Small fused models run DOP853 on Python floats (:mod:`pfaff.integrate.fastrk`), 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
-from scipy.integrate import DOP853, RK23, RK45
+from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
 from pfaff.core.errors import OptionError, PfaffError
 from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
-from pfaff.integrate.projection import Projector
 from pfaff.integrate.work import checked_sum, dense_work
-from pfaff.numeric.kkt import RESCALE_BELOW
+from pfaff.numeric.projection import Projector
+from pfaff.numeric.protocol import DynamicsModel, OdeFunction
 
 RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
-
-
-def acceleration_field(
-    model: Any, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None
-):
-    """y' = [q̇, q̈] with y = [q, q̇], q̈ from the (optionally Baumgarte-stabilized) KKT solve.
-
-    ``start`` = (t0, q0, q̇0) sets the reference constraint row sizes of the floor that carries
-    the solve through rank loss (:mod:`pfaff.numeric.kkt`).
-    """
-    if hasattr(model, "_row_scales"):  # NumericModel
-        scales = model._row_scales(*start) if start is not None else None
-        fun = model._ode_function(alpha, beta, scales)
-        fun.rows = RowReference(model, fun, scales)
-        return fun
-    if hasattr(model, "_ode_function"):  # a model with its own (e.g. structured O(N)) field
-        return model._ode_function(alpha, beta)
-    n, solve = model.n, model._solve_accelerations
-
-    def fun(t: float, y: np.ndarray) -> np.ndarray:
-        return np.concatenate([y[n:], solve(t, y[:n], y[n:], alpha, beta)[0]])
-
-    return fun
-
-
-class RowReference:
-    """Reference sizes of the constraint rows for the floor of :mod:`pfaff.numeric.kkt`, kept current.
-
-    A row that starts (nearly) collapsed — a linkage released from a flat configuration — has
-    no size of its own yet; while any row is below 1e-3 of the largest, the sizes at each
-    accepted step raise the references (a running maximum), and the right-hand side is rebuilt.
-    """
-
-    def __init__(self, model: Any, fun: Any, scales: np.ndarray | None) -> None:
-        self.model, self.fun, self.ref = model, fun, scales
-        self.active = scales is not None and hasattr(fun, "rescale") and self._small_rows()
-
-    def _small_rows(self) -> bool:
-        return bool((self.ref < RESCALE_BELOW * self.ref.max()).any())
-
-    def update(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        if not self.active:
-            return
-        now = self.model._row_scales(t, q, qd)
-        if now is None:
-            return
-        new = np.maximum(self.ref, now)
-        if (new > self.ref).any():
-            self.ref = new
-            self.fun.rescale(new)
-        self.active = self._small_rows()
 
 
 class _RKStepper:
@@ -86,7 +34,7 @@ class _RKStepper:
 
     def __init__(
         self,
-        fun: Any,
+        fun: OdeFunction,
         t0: float,
         y0: np.ndarray,
         t_end: float,
@@ -99,9 +47,10 @@ class _RKStepper:
                 f"which can restart from a projected state); got {name!r}"
             )
         kw = {k: opts[k] for k in ("max_step", "first_step") if opts.get(k) is not None}
-        on_lists = getattr(fun, "on_lists", None)
+        on_lists = fun.on_lists
+        self.solver: OdeSolver
         if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
-            self.solver: Any = FloatDOP853(
+            self.solver = FloatDOP853(
                 fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], list_fun=on_lists, **kw
             )
         else:
@@ -132,9 +81,7 @@ class _RKStepper:
         self.stats["steps"] += 1
         self.stats["rejected"] += max(used // self._attempt_nfev - 1, 0)
         self._dense = self._y_raw = None
-        rows = getattr(self.fun, "rows", None)
-        if rows is not None and rows.active:
-            rows.update(self.t, *self.state())
+        self.fun.accepted(self.t, *self.state())
 
     def dense(self, ts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         """States inside the last step (before any projection of its end point)."""
@@ -186,8 +133,8 @@ class _RKStepper:
 class ProjectedRK(_RKStepper):
     """Runge–Kutta on the acceleration-level ODE with projection after every accepted step."""
 
-    def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
-        fun = acceleration_field(model, start=(t0, q0, qd0))
+    def __init__(self, model: DynamicsModel, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+        fun = model.ode_function(start=(t0, q0, qd0))
         super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)
         self.projector: Projector = opts["projector"]
 
@@ -207,7 +154,7 @@ class ProjectedRK(_RKStepper):
 class BaumgarteRK(_RKStepper):
     """Runge–Kutta on the Baumgarte-stabilized acceleration-level ODE (no projection)."""
 
-    def __init__(self, model: Any, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+    def __init__(self, model: DynamicsModel, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
         alpha, beta = opts["alpha"], opts["beta"]
-        fun = acceleration_field(model, alpha, beta, start=(t0, q0, qd0))
+        fun = model.ode_function(alpha, beta, start=(t0, q0, qd0))
         super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)

@@ -12,7 +12,6 @@ import numbers
 import sys
 import time
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
@@ -26,8 +25,9 @@ from pfaff.core.errors import (
 )
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
-from pfaff.integrate.projection import Projector, residuals
 from pfaff.numeric.checks import check_model, check_state
+from pfaff.numeric.projection import Projector
+from pfaff.numeric.protocol import DynamicsModel
 from pfaff.results.trajectory import Trajectory
 
 METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
@@ -131,29 +131,26 @@ def _options(method: str, kw: dict, span: tuple[float, float]) -> dict:
 
 
 def initial_state(
-    model: Any, t0: float, q0: object, qd0: object, projector: Projector, opts: dict
+    model: DynamicsModel, t0: float, q0: object, qd0: object, projector: Projector, opts: dict
 ) -> tuple[np.ndarray, np.ndarray]:
     """Check (q0, q̇0) against the constraints; polish it onto them, or refuse it with the residual.
 
     Then check that the accelerations are determined there (``check_determined``: M positive
-    definite on the admissible motions), once per run.
+    definite on the admissible motions, the constraints consistent), once per run.
     """
     names = model.coordinate_names if isinstance(model.coordinate_names, list) else None
     t0, q, qd = check_state(t0, q0, qd0, model.n, names, ("t0", "q0", "qd0"))
     if model.m:
         q, qd = _onto_constraints(model, t0, q, qd, projector, opts)
-    if hasattr(model, "check_determined"):
-        model.check_determined(t0, q, qd)
-    if model.m and hasattr(model, "_row_scales"):
-        model._solve_accelerations(t0, q, qd)  # raises if no q̈ satisfies the constraints here
+    model.check_determined(t0, q, qd)
     return q, qd
 
 
 def _onto_constraints(
-    model: Any, t0: float, q: np.ndarray, qd: np.ndarray, projector: Projector, opts: dict
+    model: DynamicsModel, t0: float, q: np.ndarray, qd: np.ndarray, projector: Projector, opts: dict
 ) -> tuple[np.ndarray, np.ndarray]:
     """The initial state polished onto the constraints, or refused with its residual."""
-    f, g = residuals(model, t0, q, qd)
+    f, g = model.residual(t0, q, qd)
     f = np.where(projector.holonomic, f, 0.0)
     worst = max(np.abs(f).max(), np.abs(g).max())
     if worst > opts["initial_tol"] and not opts["project_initial"]:
@@ -176,39 +173,11 @@ def _onto_constraints(
         )
     if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
         raise StateError("the initial state could not be projected onto the constraints")
-    return q, qd
-    f, g = residuals(model, t0, q, qd)
-    f = np.where(projector.holonomic, f, 0.0)
-    worst = max(np.abs(f).max(), np.abs(g).max())
-    if worst > opts["initial_tol"] and not opts["project_initial"]:
-        i = int(np.argmax(np.maximum(np.abs(f), np.abs(g))))
-        raise StateError(
-            f"the initial state is off the constraint manifold: max |f| = {np.abs(f).max():.3g}, "
-            f"max |A q̇ + b| = {np.abs(g).max():.3g} (worst: constraint "
-            f"`{model.constraint_names[i]}`). Use pfaff.consistent_state to complete a state from "
-            "independent coordinates, or pass project_initial=True to project it"
-        )
-    try:
-        with np.errstate(all="ignore"):
-            q, qd, _ = projector(t0, q, qd)
-    except (ValueError, np.linalg.LinAlgError, FloatingPointError):  # NaN from a singular A
-        q = qd = np.full(model.n, np.nan)
-    if not (np.isfinite(q).all() and np.isfinite(qd).all()):
-        raise StateError(
-            "the initial state could not be projected onto the constraints: the constraint "
-            "Jacobian is singular there (e.g. a pendulum bob at its pivot); start elsewhere"
-        )
-    if projector.residual(t0, q, qd) > max(opts["initial_tol"], 1e3 * projector.tol):
-        raise StateError("the initial state could not be projected onto the constraints")
-    if hasattr(model, "check_determined"):
-        model.check_determined(t0, q, qd)
-    if hasattr(model, "_row_scales"):
-        model._solve_accelerations(t0, q, qd)  # raises if no q̈ satisfies the constraints here
     return q, qd
 
 
 def simulate(
-    model: Any,
+    model: DynamicsModel,
     q0: Sequence[float] | np.ndarray,
     qd0: Sequence[float] | np.ndarray,
     t_span: tuple[float, float],
@@ -337,7 +306,7 @@ def simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = method != "baumgarte"
-    power = model.power_function() if getattr(model, "applied_power", False) else None
+    power = model.power_function() if model.applied_power else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
@@ -432,24 +401,6 @@ class _Run:
         return status, message
 
 
-def _evaluate(model: Any, T: np.ndarray, Q: np.ndarray, QD: np.ndarray) -> dict:
-    """q̈, λ, f, g and energies at every reported state (batched when the model can)."""
-    if hasattr(model, "evaluate_states"):
-        return model.evaluate_states(T, Q, QD)
-    k, n, m = len(T), model.n, model.m
-    out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m))}
-    out |= {key: np.zeros((k, m)) for key in ("f", "g")}
-    out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
-    for i in range(k):
-        t, q, qd = float(T[i]), Q[i], QD[i]
-        out["qdd"][i], out["multipliers"][i] = model._solve_accelerations(t, q, qd)
-        out["f"][i], out["g"][i] = residuals(model, t, q, qd)
-        out["T"][i], out["V"][i] = model.energy(t, q, qd)
-        out["T0"][i] = model.energy(t, q, np.zeros(n))[0]
-        out["T2"][i] = 0.5 * (out["T"][i] + model.energy(t, q, -qd)[0]) - out["T0"][i]
-    return out
-
-
 def _stacked(rows: list, n: int) -> np.ndarray:
     """The recorded states as one (k, n) array; the list is emptied (no second copy alive)."""
     out = np.stack(rows) if rows else np.zeros((0, n))
@@ -461,7 +412,7 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
     n, m = model.n, model.m
     T = np.array(run.T)
     Q, QD = _stacked(run.Q, n), _stacked(run.QD, n)
-    ev = _evaluate(model, T, Q, QD) if len(T) else None
+    ev = model.evaluate_states(T, Q, QD) if len(T) else None
     if ev is None:
         z, zm = np.zeros((0, n)), np.zeros((0, m))
         ev = {"qdd": z, "multipliers": zm, "f": zm, "g": zm, "T": T, "V": T, "T0": T, "T2": T}

@@ -2,11 +2,11 @@
 
 :class:`NumericModel` (general systems) and :class:`pfaff.numeric.structured.StructuredModel`
 (families, O(N) solves) are built by the derivation stage's compiler from generated functions and
-index arrays; the integrators use them.
+index arrays; both implement :class:`pfaff.numeric.protocol.DynamicsModel`, all the integrators use.
 """
 
-from pfaff.numeric.backsub import multipliers_by_back_substitution
 from pfaff.numeric.checks import check_state
 from pfaff.numeric.model import NumericModel
+from pfaff.numeric.protocol import DynamicsModel
 
-__all__ = ["NumericModel", "check_state", "multipliers_by_back_substitution"]
+__all__ = ["DynamicsModel", "NumericModel", "check_state"]

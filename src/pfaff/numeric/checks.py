@@ -14,6 +14,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from pfaff.core.errors import ModelTypeError, PfaffError, StateError
+from pfaff.numeric.protocol import DynamicsModel
 
 
 def real_number(value: object, arg: str, error: type[PfaffError] = StateError) -> float:
@@ -107,7 +108,7 @@ def check_model(model: object, arg: str = "model") -> None:
 
     The common slip, equations or a system passed before ``.compile(parameters)``, is named.
     """
-    if all(hasattr(model, a) for a in ("n", "m", "_state", "_solve_accelerations")):
+    if isinstance(model, DynamicsModel):
         return
     kind = type(model).__name__
     if hasattr(model, "compile"):

@@ -3,13 +3,17 @@
 No SymPy here: the compile stage hands over :class:`pfaff.numeric.kernel.Kernel` objects and index arrays.
 The augmented system is solved in its symmetric form
 
-    [[M, Aᵀ], [A, 0]] [q̈; -λ] = [Q - h; -(Ȧq̇ + ḃ)],
+    [[M, Aᵀ], [A, 0]] [q̈; -λ] = [Q - h; -(Ȧq̇ + ḃ)]
 
-densely for small systems and with SciPy's sparse LU (SuperLU) otherwise.
+by one of the solvers of :mod:`pfaff.numeric.kkt` (``range-space`` with the rank-loss floor for
+small systems, ``lu``, or ``sparse`` above ``DENSE_LIMIT`` unknowns). Up to ``FUSED_LIMIT``
+unknowns the compile stage also hands over a fused scalar kernel (:mod:`pfaff.numeric.fused`):
+the whole system as one function on floats, and the range-space solve as generated code.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -18,26 +22,40 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 
 from pfaff.core.errors import (
     ConstraintError,
     InertiaError,
+    OptionError,
     PfaffError,
     StateError,
     raised_in_generated_code,
     undefined_at,
 )
-from pfaff.numeric.checks import check_finite, check_state
+from pfaff.numeric.checks import check_finite, check_state, real_vector
 from pfaff.numeric.kernel import Kernel
-from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, row_scales, solve_floored
+from pfaff.numeric.kkt import (
+    FLOOR,
+    RESCALE_BELOW,
+    STATE_FLOOR,
+    KKTSolver,
+    KKTSystem,
+    LUSolver,
+    RangeSpaceSolver,
+    SingularKKT,
+    SparseSolver,
+    row_scales,
+    solve_floored,
+)
+from pfaff.numeric.projection import DAMPING, mass_metric_correction
+from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 
 if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
 
-_gesv = scipy.linalg.lapack.dgesv
 _potrf = scipy.linalg.lapack.dpotrf
 DENSE_LIMIT = 400  # n + m up to which the KKT system is assembled and solved densely
+SOLVERS = {c.name: c for c in (RangeSpaceSolver, LUSolver, SparseSolver)}
 M_PIVOT = 1e-10  # a Cholesky pivot of M below this times max diag M: M is (nearly) singular
 
 
@@ -96,7 +114,7 @@ class NumericModel:
         m: int,
         param_values: Sequence[float],
         names: dict,
-        fused: FusedKernel | None = None,
+        solver: str | None = None,
     ) -> None:
         self.n, self.m = n, m
         self._dyn, self._con, self._p = dyn, con, list(param_values)
@@ -108,6 +126,13 @@ class NumericModel:
         for part in con:
             self.holonomic[part.rows] = names["holonomic_rows"][part.rows]
         N = n + m
+        if solver is None:
+            solver = "range-space" if N <= DENSE_LIMIT else "sparse"
+        if solver not in SOLVERS:
+            raise OptionError(f"`solver` must be one of {', '.join(SOLVERS)}; got {solver!r:.80}")
+        self.solver: str = solver
+        self._solver: KKTSolver = SOLVERS[solver](n, m)
+        self._lu = LUSolver(n, m)
         mr = [np.ravel(p.mass_rows) for p in dyn]
         mc = [np.ravel(p.mass_cols) for p in dyn]
         ar = [np.ravel(np.broadcast_to(p.rows, p.cols.shape)) for p in con]
@@ -116,15 +141,49 @@ class NumericModel:
         self._mr, self._mc, self._ar, self._ac = cat(mr), cat(mc), cat(ar), cat(ac)
         rows = np.concatenate([self._mr, n + self._ar, self._ac])
         cols = np.concatenate([self._mc, self._ac, n + self._ar])
-        self.dense = N <= DENSE_LIMIT
+        self.dense = solver != "sparse"
         self._kkt_lin = cols * N + rows  # column-major: sorted order is CSC order
         self._kkt_uniq, self._kkt_slot = _slots(self._kkt_lin)
         self._frows = cat([np.ravel(p.forcing_rows) for p in dyn])
         self.stats = {"kkt_solves": 0}
-        self._fused = fused
+        self._fused: FusedKernel | None = None  # see use_fused
         # M not safely positive definite at the first state of the run (check_determined): the
         # range-space solve (M⁻¹) is unusable, the whole augmented matrix is solved by LU
         self._full_kkt = False
+
+    def use_fused(self, fused: FusedKernel) -> bool:
+        """Evaluate through ``fused`` from now on, if it agrees with the template kernels.
+
+        The test: M, A, Q − h, b, Ȧq̇ + ḃ and f at a random state to 1e-9, and the one-function
+        right-hand side (``fused.rfn``, dropped when it disagrees) against the array solve.
+        Only the ``range-space`` solver takes it: its generated solve is that algorithm.
+        """
+        if self.solver != "range-space":
+            return False
+        rng = np.random.default_rng(7)
+        t0, q, qd = 0.3, rng.uniform(0.2, 0.9, self.n), rng.uniform(-0.5, 0.5, self.n)
+        try:
+            ref = self._kkt(t0, q, qd)
+            self._fused = fused
+            new = self._kkt(t0, q, qd)
+            for a, b in zip(ref, new, strict=True):
+                scale = 1e-12 * (1 + np.max(np.abs(a), initial=0))
+                if not np.allclose(a, b, rtol=1e-9, atol=scale):
+                    raise ValueError("the fused kernel disagrees")
+            self._fused = dataclasses.replace(fused, rfn=None)
+            slow = self.solve(t0, q, qd)[0]
+            fast = None
+            if fused.rfn is not None:
+                taus = [0.0] * (self.m + 1)  # no floor
+                fast = fused.rfn(*self._p, 0.0, 0.0, *taus, lambda t, y: None)(
+                    t0, [*q.tolist(), *qd.tolist()]
+                )
+        except Exception:  # anything wrong here: keep the template kernels
+            self._fused = None
+            return False
+        if fast is not None and np.allclose(fast[self.n :], slow, rtol=1e-10, atol=1e-13):
+            self._fused = fused
+        return True
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
@@ -185,17 +244,16 @@ class NumericModel:
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
         t, q, qd = self._state(t, q, qd)
-        f, g = self._residual(t, q, qd)
+        f, g = self.residual(t, q, qd)
         check_finite(t, "the constraint residual", f, g)
         return f, g
 
-    def _residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if self._fused is not None:
-            _, _, _, _, f, g = self._kkt(t, q, qd)
-            return f, g
-        avals, b, _, f = self._constraints(t, q, qd)
-        g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=self.m)
-        return f, g
+    def acceleration_residual(self, t: float, q: object, qd: object, qdd: object) -> np.ndarray:
+        """A q̈ + Ȧq̇ + ḃ, shape (m,): zero for accelerations that satisfy the constraints."""
+        t, q, qd = self._state(t, q, qd)
+        qdd = real_vector(qdd, "qdd", self.n)
+        avals, _, bias, _ = self._constraints(t, q, qd)
+        return bias + np.bincount(self._ar, weights=avals * qdd[self._ac], minlength=self.m)
 
     def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
         """Kinetic and potential energy (T, V)."""
@@ -274,38 +332,29 @@ class NumericModel:
         scales: np.ndarray | None = None,
         full: bool | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """q̈ and λ of K [q̈; −λ] = [Q − h; c].
+        """q̈ and λ of K [q̈; −λ] = [Q − h; c] by the model's solver (:mod:`pfaff.numeric.kkt`).
 
-        Dense systems take the range-space solve of :mod:`pfaff.numeric.kkt`, which passes configurations
-        where A loses rank (a linkage folded flat); a singular M (a coordinate without inertia)
-        goes to LAPACK gesv on K, then to least squares, and so does every solve when ``full``
-        (default: the model's mode, set by :meth:`check_determined`: M singular or nearly so,
-        where a Cholesky factorization of M may pass on rounding and return garbage). Sparse
-        systems go to SuperLU. ``floor``: and ``scales``: see :mod:`pfaff.numeric.kkt` (``FLOOR`` with
-        row scales in integrators, ``STATE_FLOOR`` for single states).
+        ``full`` (default: the model's mode, set by :meth:`check_determined`): M singular or
+        nearly so, where a Cholesky factorization of M may pass on rounding and return garbage:
+        LU on the whole K. ``floor`` and ``scales``: the rank-loss floor (``FLOOR`` with row
+        scales in integrators, ``STATE_FLOOR`` for single states).
         """
         self.stats["kkt_solves"] += 1
-        n = self.n
+        full = self._full_kkt if full is None else full
+        solver = self._lu if full and self.dense else self._solver
         try:
-            if self.dense:
-                try:
-                    if self._full_kkt if full is None else full:
-                        raise np.linalg.LinAlgError
-                    qdd, lam = solve_floored(K[:n, :n], K[n:, :n], forcing, c, floor, scales)
-                except np.linalg.LinAlgError:
-                    qdd, lam = self._solve_full(K, np.concatenate([forcing, c]), t)
-            else:
-                sol = spla.splu(K).solve(np.concatenate([forcing, c]))
-                qdd, lam = sol[:n], -sol[n:]
-        except (np.linalg.LinAlgError, RuntimeError, ValueError) as e:
+            qdd, lam = solver.solve(KKTSystem(forcing, c, K), floor=floor, scales=scales)
+            if isinstance(solver, SparseSolver):
+                self.stats["fill"] = solver.fill
+        except (np.linalg.LinAlgError, ValueError) as e:
             _check_finite(K, forcing, c, t)
-            raise ConstraintError(self._singular_message(t)) from e
-        if not math.isfinite(qdd.sum() + lam.sum()):
+            raise ConstraintError(self._singular_message(t, e)) from None
+        if not math.isfinite(qdd.sum() + lam.sum()):  # type: ignore[union-attr]
             _check_finite(K, forcing, c, t)
             raise ConstraintError(self._singular_message(t))
         if floor == STATE_FLOOR and self.dense and self.m:
-            self._check_consistent(K[n:, :n], qdd, c, t)
-        return qdd, lam
+            self._check_consistent(K[self.n :, : self.n], qdd, c, t)
+        return qdd, lam  # type: ignore[return-value]
 
     def _check_consistent(self, A: np.ndarray, qdd: np.ndarray, c: np.ndarray, t: float) -> None:
         """A single state's q̈ must satisfy A q̈ = c: else the constraints are inconsistent here."""
@@ -318,48 +367,23 @@ class NumericModel:
                 f"constraint `{self.constraint_names[i]}` together with the others)"
             )
 
-    def _solve_full(self, K: np.ndarray, rhs: np.ndarray, t: float) -> tuple:
-        """q̈, λ from the whole dense augmented matrix (LAPACK gesv, then least squares)."""
-        # LAPACK gesv straight: np.linalg.solve's checks cost 4x the solve of a 3x3 system
-        sol, info = _gesv(K, rhs)[2:]
-        if info != 0:
-            sol = self._least_squares(K, rhs, t)
-        return sol[: self.n], -sol[self.n :]
+    def solve(
+        self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f
+        (:class:`pfaff.numeric.protocol.DynamicsModel`)."""
+        return self._solve(t, q, qd, alpha, beta, STATE_FLOOR, None)
 
-    def _least_squares(self, K: np.ndarray, rhs: np.ndarray, t: float) -> np.ndarray:
-        """Rank-deficient K: redundant constraints at this configuration (a linkage folded flat).
-
-        If the equations are consistent, the minimum-norm least-squares solution keeps the unique
-        q̈ and the minimum-norm λ. A constraint with no gradient at all, or inconsistent equations,
-        is an error.
-        """
-        n = self.n
-        A = K[n:, :n]
-        dead = np.flatnonzero(np.abs(A).max(axis=1, initial=0.0) == 0.0)
-        if dead.size:
-            names = ", ".join(f"`{self.constraint_names[i]}`" for i in dead[:5])
-            raise ConstraintError(
-                f"{self._singular_message(t)}; constraint {names} has a zero gradient here"
-            )
-        self.stats["kkt_lstsq"] = self.stats.get("kkt_lstsq", 0) + 1
-        sol = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]
-        if np.linalg.norm(K @ sol - rhs) > 1e-8 * (1.0 + np.linalg.norm(rhs)):
-            raise ConstraintError(self._singular_message(t) + " (inconsistent equations)")
-        return sol
-
-    def _solve_accelerations(
+    def _solve(
         self,
         t: float,
         q: np.ndarray,
         qd: np.ndarray,
-        alpha: float = 0.0,
-        beta: float = 0.0,
-        floor: float = STATE_FLOOR,
-        scales: np.ndarray | None = None,
+        alpha: float,
+        beta: float,
+        floor: float,
+        scales: np.ndarray | None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f."""
-        if self._fused is not None and not (alpha or beta) and floor == STATE_FLOOR:
-            return self._fused_accelerations(t, q, qd)
         K, forcing, _, bias, f, g = self._kkt(t, q, qd)
         c = -bias
         if alpha:
@@ -370,7 +394,7 @@ class NumericModel:
 
     def _row_scales(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
         """Reference constraint row sizes for the integrators' floor (:func:`pfaff.numeric.kkt.row_scales`)."""
-        if not self.dense or not self.m:
+        if not self.dense or not self.m or self._full_kkt:
             return None
         K = self._kkt(t, q, qd)[0]
         try:
@@ -378,89 +402,89 @@ class NumericModel:
         except np.linalg.LinAlgError:  # M singular: the full augmented matrix is used anyway
             return None
 
-    def _ode_function(
-        self, alpha: float = 0.0, beta: float = 0.0, scales: np.ndarray | None = None
-    ):
+    def ode_function(
+        self, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None
+    ) -> AccelerationField:
         """y' = [q̇, q̈] of y = [q, q̇] (Baumgarte-stabilized when α, β > 0), for integrators.
 
-        Small systems get a closure around the fused kernel: a few microseconds per call; its
-        attribute ``on_lists`` is the same function on lists of floats (:mod:`pfaff.integrate.fastrk`).
-        A non-finite q̈ raises :class:`StateError` naming the time. ``scales``: reference row
-        sizes for the floor of :mod:`pfaff.numeric.kkt` (None: no floor); the function's ``rescale(new)``
-        replaces them during a run.
+        ``start`` = (t0, q0, q̇0) sets the reference row sizes of the rank-loss floor
+        (:mod:`pfaff.numeric.kkt`); None: no floor.
         """
-        n = self.n
+        scales = self._row_scales(*start) if start is not None else None
+        return AccelerationField(self, alpha, beta, scales)
+
+    def residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unchecked (f, A q̇ + b), each shape (m,)."""
+        if self._fused is not None:
+            _, _, _, _, f, g = self._kkt(t, q, qd)
+            return f, g
+        avals, b, _, f = self._constraints(t, q, qd)
+        g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=self.m)
+        return f, g
+
+    def linearize_constraints(
+        self, t: float, q: np.ndarray, qd: np.ndarray
+    ) -> ConstraintLinearization:
+        """f, g, the row norms of A and mass-metric corrections (:mod:`pfaff.numeric.projection`).
+
+        Small fused systems correct with generated code (:func:`pfaff.numeric.smallsolve.schur_solver`
+        with damping: the same algorithm as :func:`pfaff.numeric.projection.mass_metric_correction`),
+        and with that function where M is not positive definite.
+        """
+        K, _, _, _, f, g = self._kkt(t, q, qd)
+        n, cache = self.n, []
+        A, M = K[n:, :n], K[:n, :n]
+        sq = np.asarray(A.multiply(A).sum(axis=1)).ravel() if sps.issparse(A) else (A * A).sum(1)
+
+        def general(r: np.ndarray) -> np.ndarray:
+            if not cache:
+                cache.append(mass_metric_correction(M, A))
+            return cache[0](r)
+
+        correct = general
         fk = self._fused
-        ref = [None if scales is None else np.asarray(scales, dtype=float)]  # see ``rescale``
-        if fk is None:
-            solve = self._solve_accelerations
+        if fk is not None and not self._full_kkt:
+            entries, zeros, shift = fk.entries(K), [0.0] * n, DAMPING**2
 
-            def fun(t: float, y: np.ndarray) -> np.ndarray:
-                out = np.empty(2 * n)
-                out[:n] = y[n:]
-                out[n:] = solve(t, y[:n], y[n:], alpha, beta, FLOOR, ref[0])[0]
-                if not math.isfinite(out.sum()):
-                    raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-                return out
+            def correct(r: np.ndarray) -> np.ndarray:
+                try:
+                    return np.array(fk.cfn(*entries, *zeros, *r.tolist(), shift))
+                except (ValueError, ZeroDivisionError):  # M not positive definite
+                    return general(r)
 
-            fun.rescale = lambda new: ref.__setitem__(0, new)  # type: ignore[attr-defined]
-            return fun
-        rhs = [self._fused_rhs(alpha, beta, ref[0])]
-        isfinite = math.isfinite
+        return ConstraintLinearization(f, g, np.sqrt(sq), correct, correct)
 
-        def list_fun(t: float, yl: list) -> list:
-            out = rhs[0](t, yl)
-            try:
-                finite = isfinite(sum(out))
-            except TypeError:  # a complex number: a fractional power of a negative value
-                raise StateError(_not_real(t)) from None
-            if not finite:
-                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-            return out
-
-        def fused_fun(t: float, y: np.ndarray) -> np.ndarray:
-            return np.array(list_fun(t, y.tolist()))
-
-        def rescale(new: np.ndarray) -> None:
-            rhs[0] = self._fused_rhs(alpha, beta, new)
-
-        fused_fun.on_lists = list_fun  # type: ignore[attr-defined]
-        fused_fun.rescale = rescale  # type: ignore[attr-defined]
-        return fused_fun
+    def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """(M, A, Q − h, f, g) at an unchecked state: dense when small, else CSR."""
+        K, forcing, _, _, f, g = self._kkt(t, q, qd)
+        n = self.n
+        if sps.issparse(K):
+            K = sps.csr_matrix(K)
+        return K[:n, :n], K[n:, :n], forcing, f, g
 
     def _fused_rhs(self, alpha: float, beta: float, scales: np.ndarray | None):
-        """``rhs(t, y: list) -> list`` of a fused model for given reference row sizes."""
-        fk, n = self._fused, self.n
-        kfn, ofn, sfn, p, gesv = fk.kfn, fk.ofn, fk.sfn, (*self._p, alpha, beta), _gesv
-        # no reference sizes: no floor (a singular S then goes to LAPACK and least squares)
-        taus = [0.0] * self.m if scales is None else (FLOOR * np.asarray(scales)).tolist()
-        taus.append(FLOOR if scales is not None else 0.0)  # the cap factor
+        """``rhs(t, y: list) -> list`` of a fused model for given reference row sizes: the fused
+        kernel and the generated floored range-space solve in one function; the array path where
+        M is not positive definite."""
+        n = self.n
+        fk = self._fused
+        assert fk is not None
+        floor = FLOOR if scales is not None else STATE_FLOOR
 
         def slow(t: float, yl: list) -> list:
-            try:
-                qdd = sfn(*ofn(t, *yl, *p), *taus)
-            except (ValueError, ZeroDivisionError):  # M not definite: LAPACK on the whole K
-                K, r = kfn(t, *yl, *p)
-                x, info = gesv(K, r)[2:]
-                if info != 0:  # singular: the careful path
-                    x = self._solve_full(np.array(K), np.array(r), t)[0]
-                qdd = x[:n].tolist()
-            return yl[n:] + qdd
+            y = np.array(yl)
+            return yl[n:] + self._solve(t, y[:n], y[n:], alpha, beta, floor, scales)[0].tolist()
 
-        if self._full_kkt:  # M (nearly) singular: no Cholesky of M, LU of the whole K
-
-            def full(t: float, yl: list) -> list:
-                K, r = kfn(t, *yl, *p)
-                x, info = gesv(K, r)[2:]
-                if info != 0:  # singular: the careful path
-                    x = self._solve_full(np.array(K), np.array(r), t)[0]
-                return yl[n:] + x[:n].tolist()
-
-            return full
-        return fk.rfn(*p, *taus, slow) if fk.rfn is not None else slow
+        if self._full_kkt or fk.rfn is None:
+            return slow
+        # no reference sizes: no floor (a singular S then takes the array path)
+        taus = [0.0] * self.m if scales is None else (FLOOR * np.asarray(scales)).tolist()
+        taus.append(FLOOR if scales is not None else 0.0)  # the cap factor
+        return fk.rfn(*self._p, alpha, beta, *taus, slow)
 
     def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The fused kernel's flat outputs at a state; non-real values are an error naming t."""
+        assert self._fused is not None
         try:
             v = np.array(self._fused.fn(t, *q.tolist(), *qd.tolist(), *self._p))
         except (ValueError, ArithmeticError) as e:  # math domain error, overflow, division by 0
@@ -468,19 +492,8 @@ class NumericModel:
                 raise
             raise undefined_at(e, t) from None
         if v.dtype.kind == "c":
-            raise StateError(_not_real(t))
+            raise StateError(not_real(t))
         return v
-
-    def _fused_accelerations(
-        self, t: float, q: np.ndarray, qd: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        # the hot path of small systems: every NumPy call here costs about a microsecond
-        fk, N = self._fused, self.n + self.m
-        v = self._fused_values(t, q, qd)
-        K = np.zeros((N, N))
-        K.flat[fk.kkt_index] = v[fk.kkt_source]
-        o = fk.offsets
-        return self._solve_kkt(K, v[o[0] : o[1]], v[o[1] : o[2]], t)
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
@@ -508,7 +521,7 @@ class NumericModel:
         t, q, qd = self._state(t, q, qd)
         if not self.dense:
             try:
-                return self._solve_accelerations(t, q, qd)
+                return self.solve(t, q, qd)
             except ConstraintError:
                 self.check_determined(t, q, qd)  # the precise error when M is the cause
                 raise
@@ -528,12 +541,15 @@ class NumericModel:
         factorization of M when M is safely positive definite, and an SVD of A and an
         eigenvalue decomposition of ZᵀMZ only when it is not. Sparse models (n + m >
         ``DENSE_LIMIT``) get the O(nnz) part of the test only: coordinates with neither a mass
-        entry nor a constraint entry (SuperLU fails on any other exactly singular K).
+        entry nor a constraint entry (SuperLU fails on any other exactly singular K). Then one
+        solve: no acceleration may satisfy the constraints here.
 
         Raises
         ------
         InertiaError
             Naming the coordinates that span the undetermined (or negative) directions.
+        ConstraintError
+            The constraints are inconsistent at this state.
         """
         t, q, qd = self._state(t, q, qd)
         n, K = self.n, self._kkt(t, q, qd)[0]
@@ -543,9 +559,11 @@ class NumericModel:
             free = np.flatnonzero(np.diff(Kc.indptr)[:n] == 0)  # a column of zeros in M and A
             if free.size:
                 raise InertiaError(self._undetermined_message(t, free))
-            return
-        self._full_kkt = False  # the test below may raise: no stale mode left behind
-        self._full_kkt = self._inertia(K, t)
+        else:
+            self._full_kkt = False  # the test below may raise: no stale mode left behind
+            self._full_kkt = self._inertia(K, t)
+        if self.m:
+            self.solve(t, q, qd)
 
     def _inertia(self, K: np.ndarray, t: float) -> bool:
         """The test of :meth:`check_determined` on a dense K: True when M is not safely definite.
@@ -632,8 +650,8 @@ class NumericModel:
         out.update({key: np.zeros(k) for key in ("T", "V", "T0", "T2")})
         zero = np.zeros(n)
         for i in range(k):
-            out["qdd"][i], out["multipliers"][i] = self._solve_accelerations(t[i], q[i], qd[i])
-            out["f"][i], out["g"][i] = self._residual(t[i], q[i], qd[i])
+            out["qdd"][i], out["multipliers"][i] = self.solve(t[i], q[i], qd[i])
+            out["f"][i], out["g"][i] = self.residual(t[i], q[i], qd[i])
             out["T"][i], out["V"][i] = self._energies(t[i], q[i], qd[i])
             out["T0"][i] = self._energies(t[i], q[i], zero)[0]
             out["T2"][i] = 0.5 * (out["T"][i] + self._energies(t[i], q[i], -qd[i])[0])
@@ -642,6 +660,7 @@ class NumericModel:
 
     def _fused_states(self, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> dict[str, np.ndarray]:
         fk, k, n, N = self._fused, len(t), self.n, self.n + self.m
+        assert fk is not None
         args = [t, *q.T, *qd.T, *self._p]
         vals = np.empty((k, fk.offsets[3] + self.m))
         for i, o in enumerate(fk.vfn(*args)):
@@ -671,12 +690,18 @@ class NumericModel:
             "T2": T2,
         }
 
-    def _singular_message(self, t: float) -> str:
-        return (
+    def _singular_message(self, t: float, e: Exception | None = None) -> str:
+        msg = (
             f"the augmented matrix [[M, Aᵀ], [A, 0]] is singular at t = {t:g}: the constraints are "
             "redundant or inconsistent in this configuration, or M is singular on the admissible "
             "motions (a coordinate without inertia)"
         )
+        if isinstance(e, SingularKKT) and e.dead_rows.size:
+            names = ", ".join(f"`{self.constraint_names[i]}`" for i in e.dead_rows[:5])
+            return f"{msg}; constraint {names} has a zero gradient here"
+        if isinstance(e, SingularKKT) and e.detail == "inconsistent equations":
+            return f"{msg} (inconsistent equations)"
+        return msg
 
 
 def _check_finite(
@@ -686,7 +711,7 @@ def _check_finite(
     check_finite(t, "[[M, Aᵀ], [A, 0]], Q - h or Ȧq̇ + ḃ", K, forcing, c)
 
 
-def _not_real(t: float) -> str:
+def not_real(t: float) -> str:
     return (
         f"the equations are not real at t = {t:.17g}: a fractional power of a negative value "
         "(write it with sqrt, cbrt or Abs where the model allows)"
@@ -695,3 +720,67 @@ def _not_real(t: float) -> str:
 
 def _indptr(col_of_entry: np.ndarray, N: int) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(np.bincount(col_of_entry, minlength=N))])
+
+
+class AccelerationField(OdeFunction):
+    """y' = [q̇, q̈] of a :class:`NumericModel` for the integrators, with the rank-loss floor.
+
+    Small fused systems get the generated right-hand side (a few microseconds per call) and
+    :attr:`on_lists`, the same function on lists of floats (:mod:`pfaff.integrate.fastrk`).
+    A non-finite q̈ raises :class:`StateError` naming the time.
+
+    The floor's reference row sizes (:mod:`pfaff.numeric.kkt`) are kept current: a row that
+    starts (nearly) collapsed, a linkage released from a flat configuration, has no size of its
+    own yet; while any row is below ``RESCALE_BELOW`` of the largest, the sizes at each accepted
+    step raise the references (a running maximum) and the right-hand side is rebuilt.
+    """
+
+    def __init__(
+        self, model: NumericModel, alpha: float, beta: float, scales: np.ndarray | None
+    ) -> None:
+        self.model, self.alpha, self.beta = model, alpha, beta
+        self.scales = None if scales is None else np.asarray(scales, dtype=float)
+        self.active = self.scales is not None and self._small_rows()
+        self._rhs: Callable[[float, list], list] | None = None
+        if model._fused is not None:
+            self._rhs = model._fused_rhs(alpha, beta, self.scales)
+            self.on_lists = self._on_lists
+
+    def _small_rows(self) -> bool:
+        ref = self.scales
+        return ref is not None and bool((ref < RESCALE_BELOW * ref.max()).any())
+
+    def _on_lists(self, t: float, yl: list) -> list:
+        out = self._rhs(t, yl)  # type: ignore[misc]
+        try:
+            finite = math.isfinite(sum(out))
+        except TypeError:  # a complex number: a fractional power of a negative value
+            raise StateError(not_real(t)) from None
+        if not finite:
+            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+        return out
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        if self._rhs is not None:
+            return np.array(self._on_lists(t, y.tolist()))
+        n = self.model.n
+        out = np.empty(2 * n)
+        out[:n] = y[n:]
+        out[n:] = self.model._solve(t, y[:n], y[n:], self.alpha, self.beta, FLOOR, self.scales)[0]
+        if not math.isfinite(out.sum()):
+            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+        return out
+
+    def accepted(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """Raise the reference row sizes to those at (t, q, q̇) while some row is small."""
+        if not self.active or self.scales is None:
+            return
+        now = self.model._row_scales(t, q, qd)
+        if now is None:
+            return
+        new = np.maximum(self.scales, now)
+        if (new > self.scales).any():
+            self.scales = new
+            if self._rhs is not None:
+                self._rhs = self.model._fused_rhs(self.alpha, self.beta, new)
+        self.active = self._small_rows()

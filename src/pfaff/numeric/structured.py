@@ -1,27 +1,18 @@
 """The numeric model of a system with families: template kernels over index progressions, O(N) solves.
 
-Same contract as :class:`pfaff.NumericModel` (``accelerations``, ``constraint_residual``,
-``constraint_matrix``, ``mass_matrix``, ``forcing``, ``energy``, ``project``). M and A are never
-assembled for a solve: each template contributes *streams* of entries (a value per instance at
-global row ``start + step*i`` and column ``start' + step'*i``), applied with slice arithmetic.
+The same contract as :class:`pfaff.NumericModel` (:class:`pfaff.numeric.protocol.DynamicsModel`).
+M and A are never assembled for the triangular solve: each template contributes *streams* of
+entries (a value per instance at global row ``start + step*i`` and column ``start' + step'*i``),
+applied with slice arithmetic.
 
 Kernels (:class:`pfaff.numeric.streams.StreamKernel`) evaluate each template over chunks of instances on
 two threads, take sin and cos of an angle together (:mod:`pfaff.numeric.trig`), and reduce outputs that
 only count summed (a force on an ordinary coordinate, energies) without storing them.
 
-Solvers (chosen once, at build time, from the structure; see :mod:`pfaff.numeric.solvers`):
-
-``triangular``
-    The constraint Jacobian restricted to the family coordinates, A_L, is square and banded lower
-    triangular (the ring: no slip on θ_1, then θ_{k+1} - θ_k). Null-space elimination: the
-    constraints give q̈_L = w - Z q̈_G with w = -A_L⁻¹γ, Z = A_L⁻¹A_G, the p ordinary coordinates
-    obey the p×p projected equations TᵀMT q̈_G = Tᵀ(f - M[0; w]), T = [I; -Z], and the multipliers
-    follow from A_Lᵀλ = (M q̈ - f)_L by back-substitution, λ_N first: the seed's "step backwards".
-    O(N) time and memory, no fill; M may have any sparsity.
-``sparse``
-    Anything else: the augmented matrix assembled in CSC from a pattern fixed at build time and
-    factored by SuperLU with the fill-reducing column ordering (COLAMD) of the first
-    factorization reused for every later one.
+Solvers (chosen once, at build time, from the structure; :mod:`pfaff.numeric.kkt`):
+``triangular`` (:mod:`pfaff.numeric.triangular`) where the constraint Jacobian restricted to the
+family coordinates is square and banded lower triangular (the ring), else ``sparse`` (SuperLU on
+the augmented matrix, assembled in CSC from a pattern fixed at build time).
 """
 
 from __future__ import annotations
@@ -36,8 +27,12 @@ import scipy.sparse as sps
 from pfaff.core.errors import ModelError, StateError
 from pfaff.core.lazy import LazySeq
 from pfaff.numeric.checks import check_finite, check_state, real_vector
-from pfaff.numeric.solvers import SparseSolver, TriangularSolver, triangular_plan
+from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
+from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.streams import Index, StreamKernel, add_product, indices, scatter_add, take
+from pfaff.numeric.triangular import TriangularSolver, triangular_plan
+
+SOLVERS = ("triangular", "sparse")
 
 
 class DynStreams:
@@ -175,23 +170,28 @@ class StructuredModel:
         self.constraint_names = constraint_names
         self.holonomic = np.asarray(holonomic, dtype=bool).reshape(self.m)
         self.parameters = dict(parameters)
-        self._dyn, self._con = dyn, con
+        self.dyn, self.con = dyn, con  # the blocks, read by the solvers
         self.p = p  # ordinary (non-family) coordinates, first in q
         self.stats: dict = {"kkt_solves": 0}
         self._tmp: np.ndarray | None = None
         self._zero: np.ndarray | None = None
         self.solver = "none"
+        self._pattern: _Pattern | None = None
         if solver != "none":
             plan = triangular_plan(self) if solver in (None, "triangular") else None
             if solver == "triangular" and plan is None:
                 raise ModelError("the constraints have no square banded triangular structure")
-            self._solver = TriangularSolver(self, plan) if plan is not None else SparseSolver(self)
+            self._solver: KKTSolver = (
+                TriangularSolver(self, plan) if plan is not None else SparseSolver(n, m)
+            )
+            if plan is None:
+                self._pattern = _Pattern(self)
             self.solver = self.stats["solver"] = self._solver.name
-            for part in self._dyn:
+            for part in self.dyn:
                 part.kernel.warm()
-            for part in self._con:
+            for part in self.con:
                 part.acc.warm()
-            self._scratch().fill(0.0)
+            self.scratch().fill(0.0)
 
     def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
         """True when A has the triangular structure with non-zero pivots at (t, q), which proves
@@ -214,7 +214,7 @@ class StructuredModel:
     def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, np.ndarray]:
         """Mass-entry values per block and the forcing vector Q - h."""
         mvals, f = [], np.zeros(self.n)
-        for part in self._dyn:
+        for part in self.dyn:
             outs = part.kernel(t, q, qd)
             nm = len(part.upper)
             mvals.append(outs[:nm])
@@ -228,7 +228,7 @@ class StructuredModel:
     def _accel_constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, list]:
         """A-entry values per block and bias (Ȧq̇ + ḃ) per block."""
         avals, bias = [], []
-        for part in self._con:
+        for part in self.con:
             outs = part.acc(t, q, qd)
             avals.append(outs[:-1])
             bias.append(outs[-1])
@@ -244,8 +244,8 @@ class StructuredModel:
         y = np.zeros(self.n) if out is None else out
         if out is not None and not add:
             y.fill(0.0)
-        tmp = self._scratch()
-        for part, vals in zip(self._dyn, mvals, strict=True):
+        tmp = self.scratch()
+        for part, vals in zip(self.dyn, mvals, strict=True):
             for (r, c, sym), val in zip(part.upper, vals, strict=True):
                 if np.ndim(val) == 0 and val == 0:
                     continue
@@ -254,23 +254,23 @@ class StructuredModel:
                     add_product(y, c, val, take(r, v), tmp)
         return y
 
-    def _scratch(self) -> np.ndarray:
+    def scratch(self) -> np.ndarray:
         if self._tmp is None:
-            counts = [part.kernel.count for part in self._dyn] + [p.acc.count for p in self._con]
+            counts = [part.kernel.count for part in self.dyn] + [p.acc.count for p in self.con]
             self._tmp = np.empty(max(counts, default=0))
         return self._tmp
 
     def a_matvec(self, avals: list, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """A v from evaluated constraint entries."""
         y = np.zeros(self.m) if out is None else out
-        for part, vals in zip(self._con, avals, strict=True):
+        for part, vals in zip(self.con, avals, strict=True):
             for c, val in zip(part.cols, vals, strict=True):
                 scatter_add(y, part.rows, np.multiply(val, take(c, v)))
         return y
 
     def _rows_vector(self, per_block: list) -> np.ndarray:
         out = np.zeros(self.m)
-        for part, v in zip(self._con, per_block, strict=True):
+        for part, v in zip(self.con, per_block, strict=True):
             scatter_add(out, part.rows, v)
         return out
 
@@ -285,27 +285,32 @@ class StructuredModel:
     def mass_matrix(self, t: float, q: object, qd: object | None = None) -> sps.csr_matrix:
         """M(q, t) as a SciPy CSR matrix, shape (n, n)."""
         t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
-        mvals, _ = self._dynamics(t, q, qd)
-        pairs = [rc for part in self._dyn for rc in part.mass]
-        vals = [v for part, vs in zip(self._dyn, mvals, strict=True) for v in part.mass_values(vs)]
-        M = _coo(pairs, vals, (self.n, self.n)).tocsr()
+        M = self._mass(self._dynamics(t, q, qd)[0])
         check_finite(t, "M", M)
         return M
+
+    def _mass(self, mvals: list) -> sps.csr_matrix:
+        pairs = [rc for part in self.dyn for rc in part.mass]
+        vals = [v for part, vs in zip(self.dyn, mvals, strict=True) for v in part.mass_values(vs)]
+        return _coo(pairs, vals, (self.n, self.n)).tocsr()
+
+    def _jacobian(self, avals: list) -> sps.csr_matrix:
+        pairs = [(part.rows, c) for part in self.con for c in part.cols]
+        vals = [v for vs in avals for v in vs]
+        return _coo(pairs, vals, (self.m, self.n)).tocsr()
 
     def constraint_matrix(self, t: float, q: object) -> sps.csr_matrix:
         """A(q, t) as a SciPy CSR matrix, shape (m, n)."""
         t, q, qd = self._state(t, q, np.zeros(self.n))
-        avals, _ = self._accel_constraints(t, q, qd)
-        pairs = [(part.rows, c) for part in self._con for c in part.cols]
-        vals = [v for vs in avals for v in vs]
-        A = _coo(pairs, vals, (self.m, self.n)).tocsr()
+        A = self._jacobian(self._accel_constraints(t, q, qd)[0])
         check_finite(t, "A", A)
         return A
 
-    def _residuals(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unchecked (f, A q̇ + b), each shape (m,)."""
         f, g = np.zeros(self.m), np.zeros(self.m)
-        tmp = self._scratch()
-        for part in self._con:
+        tmp = self.scratch()
+        for part in self.con:
             outs = part.res(t, q, qd)
             na = len(part.cols)
             for c, val in zip(part.cols, outs[:na], strict=True):
@@ -318,7 +323,7 @@ class StructuredModel:
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
         t, q, qd = self._state(t, q, qd)
-        f, g = self._residuals(t, q, qd)
+        f, g = self.residual(t, q, qd)
         check_finite(t, "the constraint residual", f, g)
         return f, g
 
@@ -343,8 +348,8 @@ class StructuredModel:
         t, q, qd = self._state(t, q, np.zeros(self.n))
         lam = real_vector(lam, "lam", self.m)
         avals, _ = self._accel_constraints(t, q, qd)
-        y, tmp = np.zeros(self.n), self._scratch()
-        for part, vals in zip(self._con, avals, strict=True):
+        y, tmp = np.zeros(self.n), self.scratch()
+        for part, vals in zip(self.con, avals, strict=True):
             for c, val in zip(part.cols, vals, strict=True):
                 add_product(y, c, val, take(part.rows, lam), tmp)
         return y
@@ -352,13 +357,13 @@ class StructuredModel:
     def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
         """Kinetic and potential energy (T, V)."""
         t, q, qd = self._state(t, q, qd)
-        TV = [part.energy(t, q, qd) for part in self._dyn]
+        TV = [part.energy(t, q, qd) for part in self.dyn]
         return float(sum(x for x, _ in TV)), float(sum(v for _, v in TV))
 
     @property
     def applied_power(self) -> bool:
         """True when some applied force can do work (see :meth:`power`)."""
-        return any(part.has_power for part in self._dyn)
+        return any(part.has_power for part in self.dyn)
 
     def power(self, t: float, q: object, qd: object) -> float:
         """Power of the applied forces, Qᵀq̇: the rate of the work W_nc in the energy balance."""
@@ -367,7 +372,7 @@ class StructuredModel:
 
     def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
         """:meth:`power` without the argument checks, for an integrator's checked states."""
-        parts = [part for part in self._dyn if part.has_power]
+        parts = [part for part in self.dyn if part.has_power]
 
         def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
             return math.fsum(part.power(t, q, qd) for part in parts)
@@ -375,7 +380,14 @@ class StructuredModel:
         return power
 
     # ------------------------------------------------------------------ solves
-    def _solve_accelerations(
+    def solve(
+        self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Unchecked q̈, λ with the constraint rows' right-hand side -(Ȧq̇ + ḃ) - 2αg - β²f
+        (:class:`pfaff.numeric.protocol.DynamicsModel`)."""
+        return self._solve(t, q, qd, alpha, beta)  # type: ignore[return-value]
+
+    def _solve(
         self,
         t: float,
         q: np.ndarray,
@@ -384,31 +396,62 @@ class StructuredModel:
         beta: float = 0.0,
         out: np.ndarray | None = None,
         multipliers: bool = True,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """q̈, λ with the constraint rows' right-hand side -(Ȧq̇ + ḃ) - 2αg - β²f (Baumgarte)."""
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         mvals, f = self._dynamics(t, q, qd)
         avals, bias = self._accel_constraints(t, q, qd)
         zero = all(np.ndim(b) == 0 and b == 0 for b in bias)
         c = None if zero else -self._rows_vector(bias)
         if alpha or beta:
-            fr, g = self._residuals(t, q, qd)
+            fr, g = self.residual(t, q, qd)
             c = (np.zeros(self.m) if c is None else c) - 2 * alpha * g - beta**2 * fr
         self.stats["kkt_solves"] += 1
-        return self._solver.solve(mvals, f, avals, c, out=out, multipliers=multipliers)
+        solved = self._solver.solve(
+            self._system(mvals, f, avals, c), out=out, multipliers=multipliers
+        )
+        if isinstance(self._solver, SparseSolver):
+            self.stats["fill"] = self._solver.fill
+        return solved
 
-    def _ode_function(self, alpha: float = 0.0, beta: float = 0.0):
-        """y' = [q̇, q̈] of y = [q, q̇] for the integrators: q̈ written in place, no λ."""
-        n = self.n
+    def _system(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> KKTSystem:
+        """The KKT system in the solver's form: streams, or K assembled for SuperLU."""
+        if self._pattern is None:
+            return KKTSystem(f, c, mvals=mvals, avals=avals)
+        return KKTSystem(f, c, K=self._pattern.assemble(mvals, avals))
 
-        def fun(t: float, y: np.ndarray) -> np.ndarray:
-            out = np.empty(2 * n)
-            out[:n] = y[n:]
-            self._solve_accelerations(t, y[:n], y[n:], alpha, beta, out[n:], multipliers=False)
-            if not math.isfinite(float(np.sum(out[n:]))):  # q̈ was just written: still in cache
-                raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-            return out
+    def ode_function(
+        self, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None
+    ) -> OdeFunction:
+        """y' = [q̇, q̈] of y = [q, q̇] for the integrators: q̈ written in place, no λ.
 
-        return fun
+        ``start`` is not used: these solvers have no rank-loss floor.
+        """
+        return _StreamField(self, alpha, beta)
+
+    def linearize_constraints(
+        self, t: float, q: np.ndarray, qd: np.ndarray
+    ) -> ConstraintLinearization:
+        """f, g, the row norms of A and the mass-metric correction M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹r: the KKT
+        solve with zero forcing, O(N) like every solve (:mod:`pfaff.numeric.projection`)."""
+        f, g = self.residual(t, q, qd)
+        mvals, _ = self._dynamics(t, q, qd)
+        avals, _ = self._accel_constraints(t, q, qd)
+        sq = np.zeros(self.m)
+        for part, vals in zip(self.con, avals, strict=True):
+            for val in vals:
+                scatter_add(sq, part.rows, np.multiply(val, val))
+
+        def correct(r: np.ndarray) -> np.ndarray:
+            system = self._system(mvals, self._zeros(), avals, r)
+            return self._solver.solve(system, multipliers=False)[0]
+
+        return ConstraintLinearization(f, g, np.sqrt(sq), correct, correct)
+
+    def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """(M, A, Q − h, f, g) at an unchecked state, M and A assembled as CSR."""
+        mvals, forcing = self._dynamics(t, q, qd)
+        avals, _ = self._accel_constraints(t, q, qd)
+        f, g = self.residual(t, q, qd)
+        return self._mass(mvals), self._jacobian(avals), forcing, f, g
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
@@ -437,9 +480,9 @@ class StructuredModel:
         out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
         for i in range(k):
             ti, qi, qdi = self._state(t[i], q[i], qd[i])
-            _, out["multipliers"][i] = self._solve_accelerations(ti, qi, qdi, out=out["qdd"][i])
-            out["f"][i], out["g"][i] = self._residuals(ti, qi, qdi)
-            for part in self._dyn:
+            _, out["multipliers"][i] = self._solve(ti, qi, qdi, out=out["qdd"][i])
+            out["f"][i], out["g"][i] = self.residual(ti, qi, qdi)
+            for part in self.dyn:
                 for key, v in zip(("T", "V", "T0", "T2"), part.energies(ti, qi, qdi), strict=True):
                     out[key][i] += v
         return out
@@ -458,7 +501,7 @@ class StructuredModel:
         (0.5, -1.0)
         """
         t, q, qd = self._state(t, q, qd)
-        qdd, lam = self._solve_accelerations(t, q, qd)
+        qdd, lam = self.solve(t, q, qd)
         check_finite(t, "q̈ or λ", qdd, lam)  # NumPy kernels overflow to inf, silently
         return qdd, lam
 
@@ -475,40 +518,6 @@ class StructuredModel:
         the parameter values are given (``compile``).
         """
         self._state(t, q, qd)
-
-    def project(
-        self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10
-    ) -> tuple[np.ndarray, np.ndarray, int]:
-        """Project (q, q̇) onto f(q,t) = 0 and A q̇ + b = 0 with mass-weighted minimum-norm steps.
-
-        Newton on the positions, Δq = -M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹f (the KKT solve with zero forcing), then
-        one such step on the velocities when |A q̇ + b| > tol (exact: the residual is linear in
-        q̇). Returns the new q, q̇ and the number of corrections: Newton steps, or 1 when only
-        the velocities moved; 0 means the state was returned unchanged.
-        """
-        t, q, qd = self._state(t, q, qd)
-        f, g = self._residuals(t, q, qd)  # f is 0 on the rows of velocity constraints
-        it = 0
-        while it < max_iter:
-            if np.max(np.abs(f), initial=0.0) <= tol:
-                break
-            q = q - self._step(t, q, qd, f)
-            it += 1
-            f, g = self._residuals(t, q, qd)
-        if np.max(np.abs(g), initial=0.0) > tol:
-            qd = qd - self._step(t, q, qd, g)
-            it = max(it, 1)
-        return q, qd, it
-
-    def _residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(f, A q̇ + b) without validating the state (for the projection and the integrators)."""
-        return self._residuals(t, q, qd)
-
-    def _step(self, t: float, q: np.ndarray, qd: np.ndarray, c: np.ndarray) -> np.ndarray:
-        """Δ = M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹c: the mass-weighted least change with A Δ = c."""
-        mvals, _ = self._dynamics(t, q, qd)
-        avals, _ = self._accel_constraints(t, q, qd)
-        return self._solver.solve(mvals, self._zeros(), avals, c, multipliers=False)[0]
 
     def _zeros(self) -> np.ndarray:
         if self._zero is None:
@@ -528,3 +537,69 @@ def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:
     return sps.coo_matrix(
         (cat(data), (cat(rows).astype(np.int64), cat(cols).astype(np.int64))), shape=shape
     )
+
+
+class _StreamField(OdeFunction):
+    """y' = [q̇, q̈] of a :class:`StructuredModel`: q̈ written in place, no λ computed."""
+
+    def __init__(self, model: StructuredModel, alpha: float, beta: float) -> None:
+        self.model, self.alpha, self.beta = model, alpha, beta
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        n = self.model.n
+        out = np.empty(2 * n)
+        out[:n] = y[n:]
+        self.model._solve(t, y[:n], y[n:], self.alpha, self.beta, out[n:], multipliers=False)
+        if not math.isfinite(float(np.sum(out[n:]))):  # q̈ was just written: still in cache
+            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+        return out
+
+
+class _Pattern:
+    """The augmented matrix [[M, Aᵀ], [A, 0]] of a family model in CSC, its pattern fixed at
+    build time: a solve only scatters the entry values (duplicates summed)."""
+
+    def __init__(self, model: StructuredModel) -> None:
+        self.model = model
+        n, m = model.n, model.m
+        N = self.N = n + m
+        rows, cols = [], []
+        for part in model.dyn:
+            for r, c in part.mass:
+                rows.append(_expand(r, c))
+                cols.append(_expand(c, r))
+        for part in model.con:
+            for c in part.cols:
+                rr, cc = n + _expand(part.rows, c), _expand(c, part.rows)
+                rows += [rr, cc]
+                cols += [cc, rr]
+        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, np.int64)  # noqa: E731
+        uniq, self.slot = np.unique(cat(cols) * N + cat(rows), return_inverse=True)
+        self.size = uniq.size
+        self.indices = uniq % N  # sorted by (col, row): CSC order
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(uniq // N, minlength=N))])
+
+    def assemble(self, mvals: list, avals: list) -> sps.csc_matrix:
+        data = []
+        for part, vals in zip(self.model.dyn, mvals, strict=True):
+            for (r, c), v in zip(part.mass, part.mass_values(vals), strict=True):
+                data.append(np.broadcast_to(np.asarray(v, float), (_count(r, c),)))
+        for part, vals in zip(self.model.con, avals, strict=True):
+            for c, v in zip(part.cols, vals, strict=True):
+                d = np.broadcast_to(np.asarray(v, float), (_count(part.rows, c),))
+                data += [d, d]
+        vals = np.bincount(self.slot.ravel(), weights=np.concatenate(data), minlength=self.size)
+        return sps.csc_matrix((vals, self.indices, self.indptr), shape=(self.N, self.N))
+
+
+def _count(a: Index | np.ndarray, b: Index | np.ndarray) -> int:
+    """Instances of a stream whose index sets are ``a`` and ``b``."""
+    return max(
+        np.size(indices(a)) if not isinstance(a, Index) else a.count,
+        np.size(indices(b)) if not isinstance(b, Index) else b.count,
+    )
+
+
+def _expand(a: Index | np.ndarray, b: Index | np.ndarray) -> np.ndarray:
+    """Indices of ``a`` over the instances of a stream whose other index set is ``b``."""
+    return np.broadcast_to(indices(a), (_count(a, b),)).astype(np.int64)

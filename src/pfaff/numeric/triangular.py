@@ -1,12 +1,17 @@
-"""KKT solvers of :class:`pfaff.numeric.structured.StructuredModel`, chosen once from the structure.
+"""The triangular KKT solver of :class:`pfaff.numeric.structured.StructuredModel` (the ring's).
 
-Measured on the 2-core development machine for the rolling ring (``benchmarks/ring_scale.py``):
-at N = 2^20 SuperLU on the assembled augmented matrix takes about 2 s per solve (and 16 GB-class
-fill-in budgets beyond), LAPACK's tridiagonal Cholesky of the Schur complement A M⁻¹ Aᵀ about
-0.03 s, and the triangular null-space elimination below about 0.02 s, all of it streaming. The
-triangular path needs neither a factorization nor an inverse of M, so it is the fast path; SuperLU
-with a reused fill-reducing ordering is the general fallback. CHOLMOD (scikit-sparse) and qdldl
-would need a compiled dependency for a path that is not the fast one, so they are not used.
+The constraint Jacobian restricted to the family coordinates, A_L, is square and banded lower
+triangular (the ring: no slip on θ_1, then θ_{k+1} - θ_k). Null-space elimination: the
+constraints give q̈_L = w - Z q̈_G with w = -A_L⁻¹γ, Z = A_L⁻¹A_G; the p ordinary coordinates obey
+the p×p projected equations TᵀMT q̈_G = Tᵀ(f - M[0; w]), T = [I; -Z]; and the multipliers follow
+from A_Lᵀλ = (M q̈ - f)_L by back-substitution, λ_N first: the seed's "step backwards" as the
+running sums of :mod:`pfaff.numeric.banded`. O(N) time and memory, no fill; M may have any sparsity.
+
+Why it exists, measured on the 2-core development machine for the rolling ring
+(``benchmarks/ring_scale.py``): at N = 2^20 SuperLU on the assembled augmented matrix
+(:class:`pfaff.numeric.kkt.SparseSolver`, the fallback for any other structure) takes about 2 s
+per solve, LAPACK's tridiagonal Cholesky of the Schur complement A M⁻¹ Aᵀ about 0.03 s, and this
+elimination about 0.02 s, all of it streaming; at 2^24 about 0.29 s per solve.
 
 When the constraint Jacobian is constant (the ring's), T = [I; -A_L⁻¹A_G] and M_const T are made
 at build time and a solve touches only the state-dependent mass entries: TᵀMT is summed entry by
@@ -18,24 +23,26 @@ threshold (see :data:`pfaff.numeric.streams.BLAS_BLOCK`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 
 from pfaff.core.errors import ConstraintError
 from pfaff.numeric.banded import LowerBand
+from pfaff.numeric.kkt import STATE_FLOOR, KKTSolver, KKTSystem
 from pfaff.numeric.streams import (
     Index,
     add_product,
     axpy,
     dot,
     dot3,
-    indices,
     scale,
     scatter_add,
     take,
 )
+
+if TYPE_CHECKING:
+    from pfaff.numeric.structured import StructuredModel
 
 P_MAX = 32  # ordinary coordinates for the dense projected system
 W_MAX = 8  # bandwidth of the triangular constraint structure
@@ -51,14 +58,14 @@ class TriangularPlan:
     border: list = field(default_factory=list)  # (block, entry, g, rows Index)
 
 
-def triangular_plan(model) -> TriangularPlan | None:
+def triangular_plan(model: StructuredModel) -> TriangularPlan | None:
     """The triangular structure of A, or None when A_L is not square banded lower triangular."""
     p, m = model.p, model.m
     if m == 0 or m != model.n - p or p > P_MAX:
         return None
     plan = TriangularPlan(p, 0)
     diag = np.zeros(m, dtype=bool)
-    for bi, part in enumerate(model._con):
+    for bi, part in enumerate(model.con):
         rows = part.rows
         if not isinstance(rows, Index) or (rows.step != 1 and rows.count > 1):
             return None
@@ -83,32 +90,36 @@ def triangular_plan(model) -> TriangularPlan | None:
     return plan if diag.all() else None
 
 
-class TriangularSolver:
-    """Null-space elimination through the triangular A_L (see :mod:`pfaff.numeric.structured`)."""
+class TriangularSolver(KKTSolver):
+    """Null-space elimination through the triangular A_L (module docstring).
+
+    Takes :class:`pfaff.numeric.kkt.KKTSystem` with ``mvals`` and ``avals`` (M and A are never
+    assembled); no rank-loss floor: a zero pivot of A_L is a :class:`ConstraintError`.
+    """
 
     name = "triangular"
 
-    def __init__(self, model, plan: TriangularPlan) -> None:
+    def __init__(self, model: StructuredModel, plan: TriangularPlan) -> None:
         self.model, self.plan = model, plan
         m, p = model.m, plan.p
         self.R0 = np.zeros((plan.w + 1, m))
         self.G0 = np.zeros((p, m))
         self.var_band, self.var_border = [], []
         for bi, ei, off, rows in plan.band:
-            val = model._con[bi].acc.const[ei]
+            val = model.con[bi].acc.const[ei]
             if val is None:
                 self.var_band.append((bi, ei, off, rows))
             else:
                 scatter_add(self.R0[off], rows, val)
         for bi, ei, g, rows in plan.border:
-            val = model._con[bi].acc.const[ei]
+            val = model.con[bi].acc.const[ei]
             if val is None:
                 self.var_border.append((bi, ei, g, rows))
             else:
                 scatter_add(self.G0[g], rows, val)
         self.f_local_zero = all(
             isinstance(ix, Index) and (ix.fixed or ix.count == 1) and ix.start < p
-            for part in model._dyn
+            for part in model.dyn
             for ix in part.forcing
         )
         self._v = np.zeros(model.n)  # work vectors, touched now rather than in the first solve
@@ -130,7 +141,7 @@ class TriangularSolver:
         model = self.model
         const = [
             [0.0 if c is None else c for c in part.kernel.const[: len(part.upper)]]
-            for part in model._dyn
+            for part in model.dyn
         ]
         return np.array([model.matvec(const, T[g]) for g in range(len(T))]).reshape(T.shape)
 
@@ -165,17 +176,19 @@ class TriangularSolver:
 
     def solve(
         self,
-        mvals: list,
-        f: np.ndarray,
-        avals: list,
-        c: np.ndarray | None,
+        system: KKTSystem,
+        *,
+        floor: float = STATE_FLOOR,
+        scales: np.ndarray | None = None,
         out: np.ndarray | None = None,
         multipliers: bool = True,
     ) -> tuple:
-        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero).
+        """q̈ (n,) and λ (m,) with M q̈ - F = Aᵀλ and A q̈ = c (c None: zero).
 
         q̈ is written to ``out`` when given; λ is None unless ``multipliers``.
         """
+        mvals, f, avals, c = system.mvals, system.F, system.avals, system.c
+        assert mvals is not None and avals is not None
         model, p = self.model, self.plan.p
         band, T = self.factor(avals)
         TL = T[:, p:]  # -Z
@@ -216,7 +229,7 @@ class TriangularSolver:
 
     def _varying(self, mvals: list):
         """(row, col, symmetric, values) of every state-dependent mass entry."""
-        for part, vals in zip(self.model._dyn, mvals, strict=True):
+        for part, vals in zip(self.model.dyn, mvals, strict=True):
             for (r, c, sym), val, const in zip(part.upper, vals, part.kernel.const, strict=False):
                 if const is None:
                     yield r, c, sym, val
@@ -225,7 +238,7 @@ class TriangularSolver:
         """Tᵀ M_varying T, (p, p), entry by entry without forming M T."""
         p = len(T)
         out = np.zeros((p, p))
-        tmp = self.model._scratch()
+        tmp = self.model.scratch()
         for r, c, sym, val in self._varying(mvals):
             for h in range(p):
                 for g in range(h, p):
@@ -239,7 +252,7 @@ class TriangularSolver:
 
     def _varying_rows(self, mvals: list, qdd: np.ndarray) -> None:
         """self._v[p:] += (M_varying q̈)_L: entries whose row is an ordinary coordinate skipped."""
-        p, v, tmp = self.plan.p, self._v, self.model._scratch()
+        p, v, tmp = self.plan.p, self._v, self.model.scratch()
         for r, c, sym, val in self._varying(mvals):
             for row, col in ((r, c), (c, r)) if sym else ((r, c),):
                 if not (isinstance(row, Index) and row.fixed and row.start < p):
@@ -254,7 +267,7 @@ class TriangularSolver:
             return MT
         varying = [
             [0.0 if c is not None else v for c, v in zip(part.kernel.const, vals, strict=False)]
-            for part, vals in zip(model._dyn, mvals, strict=True)
+            for part, vals in zip(model.dyn, mvals, strict=True)
         ]
         for g in range(len(T)):
             np.copyto(MT[g], self.C[g])
@@ -274,119 +287,3 @@ def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
         out.fill(0.0)
     for g in range(start, len(coef)):
         axpy(float(coef[g]), vecs[g], out)
-
-
-class SparseSolver:
-    """SuperLU on the assembled augmented matrix, its column ordering reused across solves.
-
-    The first solve orders the columns of K = [[M, Aᵀ], [A, 0]] by COLAMD; later solves store K
-    with its columns already in that order and factor it with the natural ordering.
-
-    Attributes
-    ----------
-    fill : int or None
-        Entries SuperLU stores for L and U of the last factorization (``SuperLU.nnz``: supernodal
-        storage, a little above ``L.nnz + U.nnz``, read without copying the factors); None before
-        the first solve. Also ``model.stats["fill"]``. The reused ordering keeps it at the first
-        factorization's, up to pivot ties that SuperLU breaks by row position.
-    """
-
-    name = "sparse"
-
-    def __init__(self, model) -> None:
-        self.model = model
-        n, m = model.n, model.m
-        N = n + m
-        rows, cols = [], []
-        for part in model._dyn:
-            for r, c in part.mass:
-                rows.append(_expand(r, c))
-                cols.append(_expand(c, r))
-        for part in model._con:
-            for c in part.cols:
-                rr = n + _expand(part.rows, c)
-                cc = _expand(c, part.rows)
-                rows += [rr, cc]
-                cols += [cc, rr]
-        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, np.int64)  # noqa: E731
-        lin = cat(cols) * N + cat(rows)
-        self.uniq, self.slot = np.unique(lin, return_inverse=True)
-        self.N = N
-        self.perm: np.ndarray | None = None
-        self.fill: int | None = None
-        self._pattern(None)
-
-    def _pattern(self, perm: np.ndarray | None) -> None:
-        """CSC structure of K (or of K Pc) and where each stored entry goes.
-
-        ``perm`` is SuperLU's ``perm_c``: Pr K Pc = L U with Pc[i, perm[i]] = 1, so column i of K
-        is column perm[i] of K Pc (K Pc = K[:, argsort(perm)]).
-        """
-        N = self.N
-        col, row = self.uniq // N, self.uniq % N
-        if perm is not None:
-            col = perm[col]
-        order = np.lexsort((row, col))
-        self.where = np.empty_like(order)
-        self.where[order] = np.arange(order.size)
-        self.indices = row[order]
-        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(col, minlength=N))])
-
-    def solve(
-        self,
-        mvals: list,
-        f: np.ndarray,
-        avals: list,
-        c: np.ndarray | None,
-        out: np.ndarray | None = None,
-        multipliers: bool = True,
-    ) -> tuple:
-        """q̈ (n,) and λ (m,) with M q̈ - f = Aᵀλ and A q̈ = c (c None: zero); see TriangularSolver."""
-        model = self.model
-        data = []
-        for part, vals in zip(model._dyn, mvals, strict=True):
-            for (r, cc), v in zip(part.mass, part.mass_values(vals), strict=True):
-                data.append(np.broadcast_to(np.asarray(v, float), (_count(r, cc),)))
-        for part, vals in zip(model._con, avals, strict=True):
-            for cc, v in zip(part.cols, vals, strict=True):
-                d = np.broadcast_to(np.asarray(v, float), (_count(part.rows, cc),))
-                data += [d, d]
-        vals = np.bincount(self.slot, weights=np.concatenate(data), minlength=self.uniq.size)
-        packed = np.empty_like(vals)
-        packed[self.where] = vals
-        K = sps.csc_matrix((packed, self.indices, self.indptr), shape=(self.N, self.N))
-        rhs = np.concatenate([f, np.zeros(model.m) if c is None else c])
-        try:
-            if self.perm is None:
-                lu = spla.splu(K, permc_spec="COLAMD")
-                self.perm = lu.perm_c.copy()
-                self._pattern(self.perm)
-                sol = lu.solve(rhs)
-            else:
-                lu = spla.splu(K, permc_spec="NATURAL")  # K holds K Pc: x = Pc y, x_i = y[perm_i]
-                sol = lu.solve(rhs)[self.perm]
-            self.fill = model.stats["fill"] = int(lu.nnz)
-        except RuntimeError as e:
-            raise ConstraintError(
-                "the augmented matrix [[M, Aᵀ], [A, 0]] is singular: redundant or inconsistent "
-                "constraints, or a coordinate without inertia"
-            ) from e
-        if not np.all(np.isfinite(sol)):
-            raise ConstraintError("the augmented matrix [[M, Aᵀ], [A, 0]] is singular")
-        qdd = sol[: model.n]
-        if out is not None:
-            out[:] = qdd
-            qdd = out
-        return qdd, -sol[model.n :] if multipliers else None
-
-
-def _count(a, b) -> int:
-    return max(
-        np.size(indices(a)) if not isinstance(a, Index) else a.count,
-        np.size(indices(b)) if not isinstance(b, Index) else b.count,
-    )
-
-
-def _expand(a, b) -> np.ndarray:
-    """Indices of ``a`` over the instances of a stream whose other index set is ``b``."""
-    return np.broadcast_to(indices(a), (_count(a, b),)).astype(np.int64)

@@ -1,4 +1,4 @@
-"""Solve stage: the multipliers by back-substitution, the seed's "step backwards".
+"""The ring demo's multipliers by back-substitution, the seed's "step backwards" (a demonstration).
 
 Given the generalized constraint force Aᵀλ (M q̈ − (Q − h) at a solved state), a column of A
 holding a single unknown multiplier gives it directly; removing its contribution frees the next.

@@ -1,0 +1,169 @@
+"""The one contract between numeric models and the integrators: :class:`DynamicsModel`.
+
+A numeric model holds the equations of motion of a system with n coordinates q and m constraints
+at fixed parameter values,
+
+    M(q, t) q̈ + h(q, q̇, t) = Q(q, q̇, t) + A(q, t)ᵀ λ        (n equations)
+    A(q, t) q̇ + b(q, t) = 0                                  (m constraints; g = A q̇ + b)
+    f(q, t) = 0                                              (the holonomic rows, whose A = ∂f/∂q)
+
+and, differentiated once more, A q̈ + Ȧq̇ + ḃ = 0. Solving both for q̈ and λ is the KKT solve
+(:mod:`pfaff.numeric.kkt`). Two kinds implement the contract:
+:class:`pfaff.numeric.model.NumericModel` (any system; dense, or sparse above a few hundred unknowns)
+and :class:`pfaff.numeric.structured.StructuredModel` (families of identical pieces, O(N)). The
+integrators, the projection and the trajectory use nothing else of a model.
+
+Methods come in two sets. The *checked* ones (``accelerations``, ``constraint_residual``,
+``energy``, ...) are for users: they validate their arguments and name a bad one. The *unchecked*
+ones (``solve``, ``residual``, ``linearize_constraints``, ``ode_function``, ``evaluate_states``,
+``dae_blocks``, ``power_function``) are for the integrators, on states already checked (float t,
+float arrays of shape (n,)), where a check would cost more than the evaluation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import scipy.sparse as sps
+
+Vector = np.ndarray
+Power = Callable[[float, np.ndarray, np.ndarray], float]
+
+
+@dataclass(frozen=True)
+class ConstraintLinearization:
+    """The constraints at one state, linearized for a projection onto f = 0, A q̇ + b = 0.
+
+    Attributes
+    ----------
+    f : ndarray, shape (m,)
+        Position residuals f(q, t) (0 on the rows of velocity constraints).
+    g : ndarray, shape (m,)
+        Velocity residuals A q̇ + b.
+    row_norms : ndarray, shape (m,)
+        |A_i|, the Euclidean norm of each row of A.
+    correct_positions, correct_velocities : callable
+        ``r`` (m,) -> Δ (n,): the least change, in the model's metric, with A Δ = r. Models use
+        the mass metric, Δ = M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²I)⁻¹ r (δ: a tiny damping where A loses rank).
+    """
+
+    f: np.ndarray
+    g: np.ndarray
+    row_norms: np.ndarray
+    correct_positions: Callable[[np.ndarray], np.ndarray]
+    correct_velocities: Callable[[np.ndarray], np.ndarray]
+
+
+class OdeFunction:
+    """y' = [q̇, q̈] of y = [q, q̇], as SciPy's ``solve_ivp`` solvers take it: ``fun(t, y)``.
+
+    Attributes
+    ----------
+    on_lists : callable or None
+        The same function on lists of floats, ``(t, list) -> list`` (small systems, for
+        :class:`pfaff.integrate.fastrk.FloatDOP853`), or None.
+    """
+
+    on_lists: Callable[[float, list], list] | None = None
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def accepted(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """Told after every accepted step (a field may update reference sizes); default: nothing."""
+
+
+@runtime_checkable
+class DynamicsModel(Protocol):
+    """What every compiled numeric model offers (see the module docstring for the equations).
+
+    Attributes
+    ----------
+    n, m : int
+        Coordinates and constraints (multipliers).
+    coordinate_names, multiplier_names, constraint_names : sequence of str
+    holonomic : ndarray of bool, shape (m,)
+        Which rows are position constraints f = 0.
+    parameters : dict
+        Parameter name -> value.
+    stats : dict
+        Counters of the model's work (``kkt_solves``, ...).
+    solver : str
+        The name of its KKT solver (:mod:`pfaff.numeric.kkt`).
+    applied_power : bool
+        Whether some applied force can do work.
+    """
+
+    n: int
+    m: int
+    coordinate_names: Sequence[str]
+    multiplier_names: Sequence[str]
+    constraint_names: Sequence[str]
+    holonomic: np.ndarray
+    parameters: dict
+    stats: dict
+    solver: str
+
+    @property
+    def applied_power(self) -> bool: ...
+
+    # ------------------------------------------------------------------ checked, for users
+    def accelerations(self, t: float, q: object, qd: object) -> tuple[Vector, Vector]:
+        """q̈ (n,) and λ (m,) at a state."""
+        ...
+
+    def constraint_residual(self, t: float, q: object, qd: object) -> tuple[Vector, Vector]:
+        """f (m,) and A q̇ + b (m,) at a state."""
+        ...
+
+    def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
+        """Kinetic and potential energy (T, V)."""
+        ...
+
+    def mass_matrix(self, t: float, q: object, qd: object | None = None) -> Vector | sps.spmatrix:
+        """M, shape (n, n)."""
+        ...
+
+    def constraint_matrix(self, t: float, q: object) -> Vector | sps.spmatrix:
+        """A, shape (m, n)."""
+        ...
+
+    def check_determined(self, t: float, q: object, qd: object) -> None:
+        """Raise unless q̈ is determined and the constraints consistent at this state (once per run)."""
+        ...
+
+    # ------------------------------------------------------------------ unchecked, for integrators
+    def solve(
+        self, t: float, q: Vector, qd: Vector, alpha: float = 0.0, beta: float = 0.0
+    ) -> tuple[Vector, Vector]:
+        """q̈ and λ with the constraint rows A q̈ = −(Ȧq̇ + ḃ) − 2α g − β² f (Baumgarte when α, β > 0)."""
+        ...
+
+    def residual(self, t: float, q: Vector, qd: Vector) -> tuple[Vector, Vector]:
+        """(f, g) = (f(q, t), A q̇ + b), each shape (m,)."""
+        ...
+
+    def linearize_constraints(self, t: float, q: Vector, qd: Vector) -> ConstraintLinearization:
+        """Residuals, row norms and mass-metric corrections at a state, for the projection."""
+        ...
+
+    def ode_function(
+        self, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None
+    ) -> OdeFunction:
+        """The acceleration-level ODE; ``start`` = (t0, q0, q̇0) sets the floor's row sizes."""
+        ...
+
+    def evaluate_states(self, t: Vector, q: Vector, qd: Vector) -> dict[str, Vector]:
+        """q̈, λ, f, g, T, V, T₀ and T₂ at k states (``t`` (k,), ``q`` and ``qd`` (k, n))."""
+        ...
+
+    def dae_blocks(self, t: float, q: Vector, qd: Vector) -> tuple:
+        """(M, A, Q − h, f, g) for a DAE residual: M (n, n) and A (m, n) dense or sparse."""
+        ...
+
+    def power_function(self) -> Power:
+        """P(t, q, q̇) = Qᵀq̇ of the applied forces, unchecked."""
+        ...
