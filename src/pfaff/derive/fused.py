@@ -91,6 +91,8 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         np.array(source, dtype=np.int64),
         np.array(entries, dtype=np.int64),
         (off, off + n, off + n + m, off + n + 2 * m),
+        tuple(i for i, _ in acon),
+        tuple(j for _, j in acon),
     )
 
 

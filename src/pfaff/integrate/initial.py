@@ -11,8 +11,8 @@ import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError, OptionError, StateError
 from pfaff.numeric.checks import check_model, check_state
-from pfaff.numeric.projection import newton_projection
-from pfaff.numeric.protocol import ConstraintLinearization, DynamicsModel
+from pfaff.numeric.projection import ArrayLinearization, newton_projection
+from pfaff.numeric.protocol import DynamicsModel
 
 
 def _indices(model: DynamicsModel, independent: Sequence[int | str]) -> np.ndarray:
@@ -109,18 +109,16 @@ def consistent_state(
 
         return correct
 
-    def linearize(q_: np.ndarray, qd_: np.ndarray) -> ConstraintLinearization:
+    def linearize(q_: np.ndarray, qd_: np.ndarray) -> ArrayLinearization:
         f, g = model.residual(t, q_, qd_)
         A = _dense(model.constraint_matrix(t, q_))
-        pos, vel = held(A[hol][:, dep]), held(A[:, dep])
-        return ConstraintLinearization(
-            f, g, np.sqrt((A * A).sum(axis=1)), lambda r: pos(r[hol]), vel
-        )
+        pos = held(A[hol][:, dep])
+        return ArrayLinearization(
+            np.where(hol, f, 0.0), g, np.sqrt((A * A).sum(axis=1)), tol,
+            lambda r: pos(r[hol]), held(A[:, dep]), lambda v: model.residual(t, q_, v)[1],
+        )  # fmt: skip
 
-    q, qd, _ = newton_projection(
-        linearize, lambda q_, qd_: model.residual(t, q_, qd_), q, qd, hol,
-        tol=tol, max_iter=max_iter,
-    )  # fmt: skip
+    q, qd, _ = newton_projection(linearize, q, qd, max_iter=max_iter)
     f, g = model.residual(t, q, qd)
     worst = max(np.abs(np.where(hol, f, 0.0)).max(initial=0.0), np.abs(g).max(initial=0.0))
     if not np.isfinite(worst) or worst > max(tol, 1e-9):

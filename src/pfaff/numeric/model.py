@@ -33,6 +33,7 @@ from pfaff.core.errors import (
     undefined_at,
 )
 from pfaff.numeric.checks import check_finite, check_state, real_vector
+from pfaff.numeric.fused import FusedLinearization
 from pfaff.numeric.kernel import Kernel
 from pfaff.numeric.kkt import (
     FLOOR,
@@ -47,7 +48,7 @@ from pfaff.numeric.kkt import (
     row_scales,
     solve_floored,
 )
-from pfaff.numeric.projection import DAMPING, mass_metric_correction
+from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 
 if TYPE_CHECKING:
@@ -125,6 +126,7 @@ class NumericModel:
         self.holonomic = np.zeros(m, dtype=bool)
         for part in con:
             self.holonomic[part.rows] = names["holonomic_rows"][part.rows]
+        self._holonomic_list: list[bool] = self.holonomic.tolist()
         N = n + m
         if solver is None:
             solver = "range-space" if N <= DENSE_LIMIT else "sparse"
@@ -423,36 +425,39 @@ class NumericModel:
         return f, g
 
     def linearize_constraints(
-        self, t: float, q: np.ndarray, qd: np.ndarray
+        self, t: float, q: np.ndarray, qd: np.ndarray, tol: float
     ) -> ConstraintLinearization:
-        """f, g, the row norms of A and mass-metric corrections (:mod:`pfaff.numeric.projection`).
+        """The constraints linearized at a state for the projection (:mod:`pfaff.numeric.projection`):
+        mass-metric corrections, on Python floats for small fused systems
+        (:class:`pfaff.numeric.fused.FusedLinearization`), else on arrays."""
+        fk = self._fused
+        if fk is not None and not self._full_kkt:
+            try:
+                return FusedLinearization(
+                    fk, t, q.tolist(), qd.tolist(), self._p, tol, self._holonomic_list,
+                    lambda: self._array_linearization(t, q, qd, tol),
+                )  # fmt: skip
+            except (ValueError, ArithmeticError, TypeError):
+                pass  # not defined or not real here: the array path names the error
+        return self._array_linearization(t, q, qd, tol)
 
-        Small fused systems correct with generated code (:func:`pfaff.numeric.smallsolve.schur_solver`
-        with damping: the same algorithm as :func:`pfaff.numeric.projection.mass_metric_correction`),
-        and with that function where M is not positive definite.
-        """
+    def _array_linearization(
+        self, t: float, q: np.ndarray, qd: np.ndarray, tol: float
+    ) -> ArrayLinearization:
         K, _, _, _, f, g = self._kkt(t, q, qd)
         n, cache = self.n, []
         A, M = K[n:, :n], K[:n, :n]
         sq = np.asarray(A.multiply(A).sum(axis=1)).ravel() if sps.issparse(A) else (A * A).sum(1)
 
-        def general(r: np.ndarray) -> np.ndarray:
+        def correct(r: np.ndarray) -> np.ndarray:
             if not cache:
                 cache.append(mass_metric_correction(M, A))
             return cache[0](r)
 
-        correct = general
-        fk = self._fused
-        if fk is not None and not self._full_kkt:
-            entries, zeros, shift = fk.entries(K), [0.0] * n, DAMPING**2
-
-            def correct(r: np.ndarray) -> np.ndarray:
-                try:
-                    return np.array(fk.cfn(*entries, *zeros, *r.tolist(), shift))
-                except (ValueError, ZeroDivisionError):  # M not positive definite
-                    return general(r)
-
-        return ConstraintLinearization(f, g, np.sqrt(sq), correct, correct)
+        f = np.where(self.holonomic, f, 0.0)
+        return ArrayLinearization(
+            f, g, np.sqrt(sq), tol, correct, correct, lambda v: self.residual(t, q, v)[1]
+        )
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """(M, A, Q − h, f, g) at an unchecked state: dense when small, else CSR."""
@@ -741,28 +746,18 @@ class AccelerationField(OdeFunction):
         self.model, self.alpha, self.beta = model, alpha, beta
         self.scales = None if scales is None else np.asarray(scales, dtype=float)
         self.active = self.scales is not None and self._small_rows()
-        self._rhs: Callable[[float, list], list] | None = None
+        self._rhs: list = []  # [rhs(t, y: list) -> list] of a fused model, replaced on rescaling
         if model._fused is not None:
-            self._rhs = model._fused_rhs(alpha, beta, self.scales)
-            self.on_lists = self._on_lists
+            self._rhs.append(model._fused_rhs(alpha, beta, self.scales))
+            self.on_lists = _checked_lists(self._rhs)
 
     def _small_rows(self) -> bool:
         ref = self.scales
         return ref is not None and bool((ref < RESCALE_BELOW * ref.max()).any())
 
-    def _on_lists(self, t: float, yl: list) -> list:
-        out = self._rhs(t, yl)  # type: ignore[misc]
-        try:
-            finite = math.isfinite(sum(out))
-        except TypeError:  # a complex number: a fractional power of a negative value
-            raise StateError(not_real(t)) from None
-        if not finite:
-            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-        return out
-
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
-        if self._rhs is not None:
-            return np.array(self._on_lists(t, y.tolist()))
+        if self.on_lists is not None:
+            return np.array(self.on_lists(t, y.tolist()))
         n = self.model.n
         out = np.empty(2 * n)
         out[:n] = y[n:]
@@ -781,6 +776,23 @@ class AccelerationField(OdeFunction):
         new = np.maximum(self.scales, now)
         if (new > self.scales).any():
             self.scales = new
-            if self._rhs is not None:
-                self._rhs = self.model._fused_rhs(self.alpha, self.beta, new)
+            if self._rhs:
+                self._rhs[0] = self.model._fused_rhs(self.alpha, self.beta, new)
         self.active = self._small_rows()
+
+
+def _checked_lists(rhs: list) -> Callable[[float, list], list]:
+    """``rhs[0]`` with its result checked: finite and real (a closure: the hot path of small systems)."""
+    isfinite = math.isfinite
+
+    def on_lists(t: float, yl: list) -> list:
+        out = rhs[0](t, yl)
+        try:
+            finite = isfinite(sum(out))
+        except TypeError:  # a complex number: a fractional power of a negative value
+            raise StateError(not_real(t)) from None
+        if not finite:
+            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+        return out
+
+    return on_lists

@@ -26,6 +26,7 @@ the constraint impulse that the floored acceleration solve (:mod:`pfaff.numeric.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -44,7 +45,7 @@ SHRUNK = 1e-4  # smallest relative row norm that tightens a row's residual test
 _gesv = scipy.linalg.lapack.dgesv
 
 Linearize = Callable[[np.ndarray, np.ndarray], ConstraintLinearization]
-Residual = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+Correction = Callable[[np.ndarray], np.ndarray]
 
 
 def thresholds(row_norms: np.ndarray, tol: float) -> np.ndarray:
@@ -58,30 +59,60 @@ def thresholds(row_norms: np.ndarray, tol: float) -> np.ndarray:
     return tol * np.clip(row_norms / max(float(row_norms.max(initial=0.0)), 1e-300), SHRUNK, 1.0)
 
 
+class ArrayLinearization(ConstraintLinearization):
+    """A :class:`ConstraintLinearization` on arrays.
+
+    Parameters
+    ----------
+    f, g : ndarray, shape (m,)
+        Position residuals (already 0 on velocity rows) and A q̇ + b.
+    row_norms : ndarray, shape (m,)
+    tol : float
+    correct_positions, correct_velocities : callable
+        ``r -> Δ`` with A Δ = r (the position one takes the whole f, zeros on velocity rows).
+    velocity_residual : callable
+        ``q̇ -> g`` at the same q.
+    """
+
+    def __init__(
+        self,
+        f: np.ndarray,
+        g: np.ndarray,
+        row_norms: np.ndarray,
+        tol: float,
+        correct_positions: Correction,
+        correct_velocities: Correction,
+        velocity_residual: Correction,
+    ) -> None:
+        self.f, self.g, self.thr = f, g, thresholds(row_norms, tol)
+        self._cq, self._cv, self._g = correct_positions, correct_velocities, velocity_residual
+        self.position_excess = float(np.max(np.abs(f) / self.thr, initial=0.0))
+        self.velocity_excess = float(np.max(np.abs(g) / self.thr, initial=0.0))
+
+    def corrected_positions(self, q: np.ndarray) -> np.ndarray:
+        return q - self._cq(self.f)
+
+    def corrected_velocities(self, qd: np.ndarray) -> np.ndarray:
+        return qd - self._cv(self.g)
+
+    def with_velocities(self, qd: np.ndarray) -> ArrayLinearization:
+        self.g = self._g(qd)
+        self.velocity_excess = float(np.max(np.abs(self.g) / self.thr, initial=0.0))
+        return self
+
+
 def newton_projection(
-    linearize: Linearize,
-    residual: Residual,
-    q: np.ndarray,
-    qd: np.ndarray,
-    holonomic: np.ndarray,
-    *,
-    tol: float,
-    max_iter: int,
+    linearize: Linearize, q: np.ndarray, qd: np.ndarray, *, max_iter: int
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """The projection algorithm (module docstring) on any linearization.
+    """The projection's iteration policy (module docstring) on any linearization.
 
     Parameters
     ----------
     linearize : callable
-        ``(q, q̇) -> ConstraintLinearization``.
-    residual : callable
-        ``(q, q̇) -> (f, g)``, for the velocity passes.
+        ``(q, q̇) -> ConstraintLinearization`` (its tolerance fixed by the caller).
     q, qd : ndarray, shape (n,)
-    holonomic : ndarray of bool, shape (m,)
-        Rows whose f counts.
-    tol : float
     max_iter : int
-        Newton steps at most, and velocity passes at most.
+        Newton steps at most, and velocity passes at most (at least one).
 
     Returns
     -------
@@ -91,25 +122,21 @@ def newton_projection(
         Newton steps (at least 1 when only the velocities moved); 0: nothing changed.
     """
     lin = linearize(q, qd)
-    thr = thresholds(lin.row_norms, tol)
-    f, g = np.where(holonomic, lin.f, 0.0), lin.g
-    if max(np.max(np.abs(f) / thr, initial=0.0), np.max(np.abs(g) / thr, initial=0.0)) <= 1.0:
+    if max(lin.position_excess, lin.velocity_excess) <= 1.0:
         return q, qd, 0
-    it, last = 0, np.inf
-    while (err := np.max(np.abs(f) / thr)) > 1.0 and it < max_iter and err < last:
-        q = q - lin.correct_positions(f)
+    it, last = 0, math.inf
+    while (err := lin.position_excess) > 1.0 and it < max_iter and err < last:
+        q = lin.corrected_positions(q)  # Newton, with the Jacobian at the current q
         it, last = it + 1, err
         lin = linearize(q, qd)
-        thr = thresholds(lin.row_norms, tol)
-        f, g = np.where(holonomic, lin.f, 0.0), lin.g
-    last = np.inf
+    last = math.inf
     for _ in range(max(max_iter, 1)):
-        err = np.max(np.abs(g) / thr)
+        err = lin.velocity_excess
         if err <= 1.0 or err >= last:
             break
-        qd = qd - lin.correct_velocities(g)
+        qd = lin.corrected_velocities(qd)
         last = err
-        g = residual(q, qd)[1]
+        lin = lin.with_velocities(qd)
     return q, qd, max(it, 1)
 
 
@@ -144,14 +171,11 @@ class Projector:
         """The projected (q, q̇) and whether anything changed."""
         if self.model.m == 0:
             return q, qd, False
-        model = self.model
+        model, tol = self.model, self.tol
         q, qd, it = newton_projection(
-            lambda q_, qd_: model.linearize_constraints(t, q_, qd_),
-            lambda q_, qd_: model.residual(t, q_, qd_),
+            lambda q_, qd_: model.linearize_constraints(t, q_, qd_, tol),
             q,
             qd,
-            self.holonomic,
-            tol=self.tol,
             max_iter=self.max_iter,
         )
         if it:

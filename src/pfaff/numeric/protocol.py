@@ -22,8 +22,8 @@ float arrays of shape (n,)), where a check would cost more than the evaluation.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -33,28 +33,37 @@ Vector = np.ndarray
 Power = Callable[[float, np.ndarray, np.ndarray], float]
 
 
-@dataclass(frozen=True)
-class ConstraintLinearization:
-    """The constraints at one state, linearized for a projection onto f = 0, A q̇ + b = 0.
+class ConstraintLinearization(ABC):
+    """The constraints at one state, linearized for the projection (:mod:`pfaff.numeric.projection`).
+
+    With f the position residuals (0 on the rows of velocity constraints), g = A q̇ + b and the
+    row thresholds τ_i = tol · clip(|A_i| / max_j |A_j|, 1e-4, 1):
 
     Attributes
     ----------
-    f : ndarray, shape (m,)
-        Position residuals f(q, t) (0 on the rows of velocity constraints).
-    g : ndarray, shape (m,)
-        Velocity residuals A q̇ + b.
-    row_norms : ndarray, shape (m,)
-        |A_i|, the Euclidean norm of each row of A.
-    correct_positions, correct_velocities : callable
-        ``r`` (m,) -> Δ (n,): the least change, in the model's metric, with A Δ = r. Models use
-        the mass metric, Δ = M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²I)⁻¹ r (δ: a tiny damping where A loses rank).
+    position_excess, velocity_excess : float
+        max_i |f_i| / τ_i and max_i |g_i| / τ_i: at most 1 means "on the manifold".
     """
 
-    f: np.ndarray
-    g: np.ndarray
-    row_norms: np.ndarray
-    correct_positions: Callable[[np.ndarray], np.ndarray]
-    correct_velocities: Callable[[np.ndarray], np.ndarray]
+    position_excess: float
+    velocity_excess: float
+
+    @abstractmethod
+    def corrected_positions(self, q: np.ndarray) -> np.ndarray:
+        """q − Δ with Δ the least change, in the model's metric, with A Δ = f (a Newton step).
+
+        Models use the mass metric, Δ = M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²I)⁻¹ f (δ: a tiny damping where A
+        loses rank).
+        """
+
+    @abstractmethod
+    def corrected_velocities(self, qd: np.ndarray) -> np.ndarray:
+        """q̇ − Δ with A Δ = g, in the same metric."""
+
+    @abstractmethod
+    def with_velocities(self, qd: np.ndarray) -> ConstraintLinearization:
+        """The same linearization (same q, same A and metric) at other velocities; it may be
+        ``self``, updated (the projection never uses the old one again)."""
 
 
 class OdeFunction:
@@ -146,8 +155,10 @@ class DynamicsModel(Protocol):
         """(f, g) = (f(q, t), A q̇ + b), each shape (m,)."""
         ...
 
-    def linearize_constraints(self, t: float, q: Vector, qd: Vector) -> ConstraintLinearization:
-        """Residuals, row norms and mass-metric corrections at a state, for the projection."""
+    def linearize_constraints(
+        self, t: float, q: Vector, qd: Vector, tol: float
+    ) -> ConstraintLinearization:
+        """The constraints linearized at a state, for the projection to tolerance ``tol``."""
         ...
 
     def ode_function(

@@ -28,6 +28,7 @@ from pfaff.core.errors import ModelError, StateError
 from pfaff.core.lazy import LazySeq
 from pfaff.numeric.checks import check_finite, check_state, real_vector
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
+from pfaff.numeric.projection import ArrayLinearization
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.streams import Index, StreamKernel, add_product, indices, scatter_add, take
 from pfaff.numeric.triangular import TriangularSolver, triangular_plan
@@ -428,7 +429,7 @@ class StructuredModel:
         return _StreamField(self, alpha, beta)
 
     def linearize_constraints(
-        self, t: float, q: np.ndarray, qd: np.ndarray
+        self, t: float, q: np.ndarray, qd: np.ndarray, tol: float
     ) -> ConstraintLinearization:
         """f, g, the row norms of A and the mass-metric correction M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹r: the KKT
         solve with zero forcing, O(N) like every solve (:mod:`pfaff.numeric.projection`)."""
@@ -444,7 +445,10 @@ class StructuredModel:
             system = self._system(mvals, self._zeros(), avals, r)
             return self._solver.solve(system, multipliers=False)[0]
 
-        return ConstraintLinearization(f, g, np.sqrt(sq), correct, correct)
+        f = np.where(self.holonomic, f, 0.0)
+        return ArrayLinearization(
+            f, g, np.sqrt(sq), tol, correct, correct, lambda v: self.residual(t, q, v)[1]
+        )
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """(M, A, Q − h, f, g) at an unchecked state, M and A assembled as CSR."""
