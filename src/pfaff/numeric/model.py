@@ -447,12 +447,20 @@ class NumericModel:
         K, _, _, _, f, g = self._kkt(t, q, qd)
         n, cache = self.n, []
         A, M = K[n:, :n], K[:n, :n]
-        sq = np.asarray(A.multiply(A).sum(axis=1)).ravel() if sps.issparse(A) else (A * A).sum(1)
+        if sps.issparse(K):  # the KKT solve with zero forcing: M⁻¹Aᵀ(A M⁻¹Aᵀ)⁻¹ r by SuperLU
+            sq = np.asarray(A.multiply(A).sum(axis=1)).ravel()
+            zeros = np.zeros(n)
 
-        def correct(r: np.ndarray) -> np.ndarray:
-            if not cache:
-                cache.append(mass_metric_correction(M, A))
-            return cache[0](r)
+            def correct(r: np.ndarray) -> np.ndarray:
+                return self._solver.solve(KKTSystem(zeros, r, K), multipliers=False)[0]
+
+        else:
+            sq = (A * A).sum(1)
+
+            def correct(r: np.ndarray) -> np.ndarray:
+                if not cache:
+                    cache.append(mass_metric_correction(M, A))
+                return cache[0](r)
 
         f = np.where(self.holonomic, f, 0.0)
         return ArrayLinearization(

@@ -17,7 +17,8 @@ in q̇: one is exact up to the damping, which can leave a row much smaller than 
 of its test).
 
 The corrections come from the model (:meth:`pfaff.numeric.protocol.DynamicsModel.linearize_constraints`).
-For dense matrices :func:`mass_metric_correction` is the one implementation: W = M, or M + κAᵀA
+For dense matrices :func:`mass_metric_correction` is the one implementation (sparse and family
+models use their KKT solve with zero forcing, the same Δ undamped): W = M, or M + κAᵀA
 where M is singular (the same projection when M is definite on the admissible motions), damping
 δ = 1e-7 σ_max (Tikhonov), which matters only where A loses rank: there the correction along the
 collapsing direction stays bounded, and once a linkage has passed a fold the projection restores
@@ -33,7 +34,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 
 from pfaff.numeric.protocol import ConstraintLinearization
 
@@ -213,13 +213,11 @@ def _damped_solve(G: np.ndarray, r: np.ndarray) -> np.ndarray:
     return y
 
 
-def mass_metric_correction(
-    M: np.ndarray | sps.spmatrix, A: np.ndarray | sps.spmatrix
-) -> Callable[[np.ndarray], np.ndarray]:
-    """``r -> W⁻¹Aᵀ (A W⁻¹Aᵀ + δ²I)⁻¹ r``, the damped least-W-norm Δ with A Δ ≈ r.
+def mass_metric_correction(M: np.ndarray, A: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``r -> W⁻¹Aᵀ (A W⁻¹Aᵀ + δ²I)⁻¹ r``, the damped least-W-norm Δ with A Δ ≈ r (dense).
 
-    Dense: W = M (Cholesky), or M + κAᵀA where M is singular, or diag M as the last resort.
-    Sparse: W = diag M (:func:`diagonal_weights`) and SuperLU on A W⁻¹Aᵀ.
+    W = M (Cholesky), or M + κAᵀA where M is singular, or diag M as the last resort. (Sparse and
+    family models correct by their KKT solve with zero forcing: the same Δ without damping.)
 
     Examples
     --------
@@ -227,14 +225,6 @@ def mass_metric_correction(
     >>> np.round(correct(np.array([1.0])), 6).tolist()  # Δ ∝ M⁻¹Aᵀ with Δ_0 + Δ_1 = 1
     [0.75, 0.25]
     """
-    if sps.issparse(M) or sps.issparse(A):
-        A = sps.csr_matrix(A)
-        Ad = A @ sps.diags(1.0 / diagonal_weights(M))
-        G = (Ad @ A.T).tocsc()
-        delta2 = DAMPING**2 * max(G.diagonal().max(initial=0.0), 1e-300)
-        lu = spla.splu((G + delta2 * sps.identity(G.shape[0], format="csc")).tocsc())
-        return lambda r: Ad.T @ lu.solve(r)
-    W = None
     try:
         W = scipy.linalg.cho_factor(M)
     except np.linalg.LinAlgError:
