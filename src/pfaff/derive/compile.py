@@ -1,4 +1,12 @@
-"""The compile stage: parameter values checked, kernels generated, a :class:`NumericModel` built."""
+"""The compile stage: parameter values checked, kernels generated, a :class:`NumericModel` built.
+
+Each block becomes stream parts (:class:`pfaff.numeric.structured.DynStreams`,
+:class:`~pfaff.numeric.structured.ConStreams`): one generated kernel per template
+(:func:`pfaff.derive.codegen.stream_code`, the one kernel generator of NumPy code), evaluated over
+all its instances, with the global rows and columns as progressions
+(:class:`pfaff.numeric.streams.Index`) where they are, else as index arrays. The same parts make
+both model kinds (:mod:`pfaff.derive.compile_family` for families).
+"""
 
 from __future__ import annotations
 
@@ -10,17 +18,13 @@ import numpy as np
 import sympy as sp
 
 from pfaff.core.errors import ParameterError
+from pfaff.core.symbols import local_qd
 from pfaff.derive.blocks import Block
-from pfaff.derive.codegen import (
-    Kernel,
-    constraint_layout,
-    dynamics_layout,
-    energy_exprs,
-    make_kernel,
-    power_exprs,
-)
+from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
-from pfaff.numeric.model import ConstraintPart, DynamicsPart, NumericModel
+from pfaff.numeric.model import NumericModel
+from pfaff.numeric.streams import Index, StreamKernel
+from pfaff.numeric.structured import ConStreams, DynStreams
 
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
@@ -120,41 +124,54 @@ def model_parameter_values(eom: Derivation, given: dict) -> list[float]:
     return values
 
 
-def _cached(block: Block, what: str, params: tuple, build) -> Kernel:
-    cache = block.__dict__.setdefault("_kernels", {})
-    key = (what, params)
-    if key not in cache:
-        cache[key] = build()
-    return cache[key]
+def block_columns(block: Block) -> list:
+    """Per local coordinate: an :class:`Index` (progression) or an index array."""
+    if block.family:
+        return [Index(s, d, block.n_inst) for s, d in block.progressions or []]
+    return [Index.of(block.coords[:, a]) for a in range(block.coords.shape[1])]
 
 
-def dynamics_part(block: Block, params: tuple) -> DynamicsPart:
-    """Kernel and scatter indices for a dynamics block."""
-    mass, fidx, exprs = dynamics_layout(block)
-    kern = _cached(block, "dyn", params, lambda: make_kernel(block, exprs, params))
-    energy = _cached(
-        block, "energy", params, lambda: make_kernel(block, energy_exprs(block), params)
-    )
-    c = block.coords
-    mr = np.array([c[:, a] for a, _ in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
-    mc = np.array([c[:, b] for _, b in mass], dtype=np.int64).reshape(len(mass), c.shape[0])
-    fr = np.array([c[:, a] for a in fidx], dtype=np.int64).reshape(len(fidx), c.shape[0])
-    pexprs = power_exprs(block)
-    power = (
-        _cached(block, "power", params, lambda: make_kernel(block, pexprs, params))
-        if pexprs
-        else None
-    )
-    return DynamicsPart(kern, mr, mc, fr, energy, power)
+def _kernel(
+    cols: list, exprs: list, params: Sequence, values: Sequence[float], count: int, summed=None
+):
+    return StreamKernel(cols, stream_code(len(cols), exprs, params, values, count, summed), count)
 
 
-def constraint_part(block: Block, params: tuple) -> ConstraintPart:
-    """Kernel and scatter indices for a constraint block."""
-    cols, exprs = constraint_layout(block)
-    kern = _cached(block, "con", params, lambda: make_kernel(block, exprs, params))
-    c = block.coords
-    ac = np.array([c[:, a] for a in cols], dtype=np.int64).reshape(len(cols), c.shape[0])
-    return ConstraintPart(kern, block.rows, ac)
+def dyn_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[float]) -> DynStreams:
+    """The stream parts of a dynamics block: M is symmetric, so only entries a <= b are made."""
+    loc = block.local
+    upper = sorted(ab for ab in loc.mass if ab[0] <= ab[1])
+    forcing = loc.forcing
+    fidx = sorted(forcing)
+    cols = block_columns(block)
+    rows = [cols[a] for a in fidx]
+    summed = [False] * len(upper) + [isinstance(ix, Index) and ix.fixed for ix in rows]
+    exprs = [loc.mass[ab] for ab in upper] + [forcing[a] for a in fidx]
+    kernel = _kernel(cols, exprs, params, values, block.n_inst, summed)
+
+    def energy_kernel(which: str) -> StreamKernel:
+        T, V = energy_exprs(block)
+        parts = power_exprs(block) if which == "power" else [T, V]
+        if which == "energies":
+            k = len(cols)
+            T0 = T.xreplace({local_qd(a): 0 for a in range(k)})
+            Tneg = T.xreplace({local_qd(a): -local_qd(a) for a in range(k)})
+            parts += [T0, (T + Tneg) / 2 - T0]
+        return _kernel(cols, parts, params, values, block.n_inst, [True] * len(parts))
+
+    upper_streams = [(cols[a], cols[b], a != b) for a, b in upper]
+    return DynStreams(kernel, upper_streams, rows, energy_kernel, has_power=bool(loc.Q))
+
+
+def con_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[float]) -> ConStreams:
+    """The stream parts of a constraint block: ``acc`` for the solve, ``res`` for residuals."""
+    cols_local, exprs = constraint_layout(block)
+    cols = block_columns(block)
+    rows = Index(block.row0, 1, block.n_inst) if block.family else Index.of(block.rows)
+    na = len(cols_local)
+    acc = _kernel(cols, [*exprs[:na], exprs[na + 1]], params, values, block.n_inst)
+    res = _kernel(cols, exprs, params, values, block.n_inst)
+    return ConStreams(rows, [cols[a] for a in cols_local], acc, res)
 
 
 def build_model(
@@ -173,17 +190,21 @@ def build_model(
     dyn = (
         []
         if constraints_only
-        else [dynamics_part(b, params) for b in eom.blocks if b.local.kind == "dynamics"]
+        else [dyn_streams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"]
     )
-    con = [constraint_part(b, params) for b in eom.blocks if b.local.kind == "constraint"]
-    names = {
-        "coordinates": [str(q.func) for q in eom.coordinates],
-        "multipliers": [str(s) for s in eom.multipliers],
-        "constraints": list(eom.constraint_names),
-        "holonomic_rows": np.array(eom.holonomic, dtype=bool),
-        "parameters": {p.name: v for p, v in zip(params, values, strict=True)},
-    }
-    model = NumericModel(eom.n, dyn, con, eom.m, values, names, solver=solver)
+    con = [con_streams(b, params, values) for b in eom.blocks if b.local.kind == "constraint"]
+    model = NumericModel(
+        eom.n,
+        eom.m,
+        dyn,
+        con,
+        coordinate_names=[str(q.func) for q in eom.coordinates],
+        multiplier_names=[str(s) for s in eom.multipliers],
+        constraint_names=list(eom.constraint_names),
+        holonomic=np.array(eom.holonomic, dtype=bool),
+        parameters={p.name: v for p, v in zip(params, values, strict=True)},
+        solver=solver,
+    )
     if not constraints_only and model.solver == "range-space":
         try:
             fused = build_fused(eom)

@@ -1,22 +1,23 @@
-"""The numeric model: compiled M, Q - h, A, b, bias, energy and residuals, and the KKT solve.
+"""The numeric model of any system: :class:`NumericModel`, dense KKT solves and the small-system paths.
 
-No SymPy here: the compile stage hands over :class:`pfaff.numeric.kernel.Kernel` objects and index arrays.
-The augmented system is solved in its symmetric form
+No SymPy here: the compile stage hands over template kernels over index arrays
+(:class:`pfaff.numeric.structured.StreamModel` evaluates them, as for families). The augmented
+system is solved in its symmetric form
 
     [[M, Aᵀ], [A, 0]] [q̈; -λ] = [Q - h; -(Ȧq̇ + ḃ)]
 
 by one of the solvers of :mod:`pfaff.numeric.kkt` (``range-space`` with the rank-loss floor for
-small systems, ``lu``, or ``sparse`` above ``DENSE_LIMIT`` unknowns). Up to ``FUSED_LIMIT``
-unknowns the compile stage also hands over a fused scalar kernel (:mod:`pfaff.numeric.fused`):
-the whole system as one function on floats, and the range-space solve as generated code.
+small systems, ``lu``, or ``sparse`` above ``DENSE_LIMIT`` unknowns). Up to
+:data:`pfaff.derive.fused.FUSED_LIMIT` unknowns the compile stage also hands over a fused scalar
+kernel (:mod:`pfaff.numeric.fused`): the whole system as one function on floats, and the
+range-space solve as generated code.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -32,14 +33,12 @@ from pfaff.core.errors import (
     raised_in_generated_code,
     undefined_at,
 )
-from pfaff.numeric.checks import check_finite, check_state, real_vector
+from pfaff.numeric.checks import check_finite
 from pfaff.numeric.fused import FusedLinearization
-from pfaff.numeric.kernel import Kernel
 from pfaff.numeric.kkt import (
     FLOOR,
     RESCALE_BELOW,
     STATE_FLOOR,
-    KKTSolver,
     KKTSystem,
     LUSolver,
     RangeSpaceSolver,
@@ -50,6 +49,7 @@ from pfaff.numeric.kkt import (
 )
 from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
+from pfaff.numeric.structured import ConStreams, DynStreams, KKTPattern, StreamModel
 
 if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
@@ -60,34 +60,7 @@ SOLVERS = {c.name: c for c in (RangeSpaceSolver, LUSolver, SparseSolver)}
 M_PIVOT = 1e-10  # a Cholesky pivot of M below this times max diag M: M is (nearly) singular
 
 
-@dataclass
-class DynamicsPart:
-    """A dynamics kernel with the global (row, col) of each mass entry and row of each forcing entry."""
-
-    kernel: Kernel
-    mass_rows: np.ndarray  # shape (n_mass, n_inst)
-    mass_cols: np.ndarray
-    forcing_rows: np.ndarray  # shape (n_forcing, n_inst)
-    energy: Kernel
-    power: Kernel | None = None  # Σ Q_a q̇_a of the applied forces; None without any
-
-
-@dataclass
-class ConstraintPart:
-    """A constraint kernel: A entries (row, col), then b, bias and f per instance row."""
-
-    kernel: Kernel
-    rows: np.ndarray  # shape (n_inst,)
-    cols: np.ndarray  # shape (n_A, n_inst)
-
-
-def _slots(lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique sorted linear indices and, per entry, its slot (duplicates are summed)."""
-    uniq, slot = np.unique(lin, return_inverse=True)
-    return uniq, slot.ravel()
-
-
-class NumericModel:
+class NumericModel(StreamModel):
     """Compiled equations of motion for one set of parameter values.
 
     Attributes
@@ -110,44 +83,32 @@ class NumericModel:
     def __init__(
         self,
         n: int,
-        dyn: list[DynamicsPart],
-        con: list[ConstraintPart],
         m: int,
-        param_values: Sequence[float],
-        names: dict,
+        dyn: list[DynStreams],
+        con: list[ConStreams],
+        *,
+        coordinate_names: list[str],
+        multiplier_names: list[str],
+        constraint_names: list[str],
+        holonomic: np.ndarray,
+        parameters: dict[str, float],
         solver: str | None = None,
     ) -> None:
-        self.n, self.m = n, m
-        self._dyn, self._con, self._p = dyn, con, list(param_values)
-        self.coordinate_names: list[str] = names["coordinates"]
-        self.multiplier_names: list[str] = names["multipliers"]
-        self.constraint_names: list[str] = names["constraints"]
-        self.parameters: dict = names["parameters"]
-        self.holonomic = np.zeros(m, dtype=bool)
-        for part in con:
-            self.holonomic[part.rows] = names["holonomic_rows"][part.rows]
+        super().__init__(
+            n, m, dyn, con, coordinate_names=coordinate_names, constraint_names=constraint_names,
+            holonomic=holonomic, parameters=parameters, multiplier_names=multiplier_names,
+        )  # fmt: skip
+        self._p = list(self.parameters.values())  # in the order of the fused kernel's arguments
         self._holonomic_list: list[bool] = self.holonomic.tolist()
-        N = n + m
         if solver is None:
-            solver = "range-space" if N <= DENSE_LIMIT else "sparse"
+            solver = "range-space" if n + m <= DENSE_LIMIT else "sparse"
         if solver not in SOLVERS:
             raise OptionError(f"`solver` must be one of {', '.join(SOLVERS)}; got {solver!r:.80}")
         self.solver: str = solver
-        self._solver: KKTSolver = SOLVERS[solver](n, m)
+        self._solver = SOLVERS[solver](n, m)
         self._lu = LUSolver(n, m)
-        mr = [np.ravel(p.mass_rows) for p in dyn]
-        mc = [np.ravel(p.mass_cols) for p in dyn]
-        ar = [np.ravel(np.broadcast_to(p.rows, p.cols.shape)) for p in con]
-        ac = [np.ravel(p.cols) for p in con]
-        cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, dtype=np.int64)  # noqa: E731
-        self._mr, self._mc, self._ar, self._ac = cat(mr), cat(mc), cat(ar), cat(ac)
-        rows = np.concatenate([self._mr, n + self._ar, self._ac])
-        cols = np.concatenate([self._mc, self._ac, n + self._ar])
         self.dense = solver != "sparse"
-        self._kkt_lin = cols * N + rows  # column-major: sorted order is CSC order
-        self._kkt_uniq, self._kkt_slot = _slots(self._kkt_lin)
-        self._frows = cat([np.ravel(p.forcing_rows) for p in dyn])
-        self.stats = {"kkt_solves": 0}
+        self._pattern = KKTPattern(self)
         self._fused: FusedKernel | None = None  # see use_fused
         # M not safely positive definite at the first state of the run (check_determined): the
         # range-space solve (M⁻¹) is unusable, the whole augmented matrix is solved by LU
@@ -187,110 +148,17 @@ class NumericModel:
             self._fused = fused
         return True
 
-    # ------------------------------------------------------------------ validation
-    def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
-        return check_state(t, q, qd, self.n, self.coordinate_names)
-
-    # ------------------------------------------------------------------ raw evaluation
-    def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        mdata, fdata = [], []
-        for part in self._dyn:
-            outs = part.kernel(t, q, qd, self._p)
-            nm, nf = part.mass_rows.shape[0], part.forcing_rows.shape[0]
-            mdata.extend(outs[:nm])
-            # [nm : nm + nf]: a block with no entries at all (a zero generalized force) has a
-            # kernel with one placeholder output, which is no forcing entry
-            fdata.extend(outs[nm : nm + nf])
-        mvals = np.concatenate(mdata) if mdata else np.zeros(0)
-        fvals = np.concatenate(fdata) if fdata else np.zeros(0)
-        forcing = np.bincount(self._frows, weights=fvals, minlength=self.n)
-        return mvals, forcing
-
-    def _constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, ...]:
-        adata = []
-        b, bias, f = np.zeros(self.m), np.zeros(self.m), np.zeros(self.m)
-        for part in self._con:
-            outs = part.kernel(t, q, qd, self._p)
-            na = part.cols.shape[0]
-            adata.extend(outs[:na])
-            b[part.rows], bias[part.rows], f[part.rows] = outs[na], outs[na + 1], outs[na + 2]
-        avals = np.concatenate(adata) if adata else np.zeros(0)
-        return avals, b, bias, f
-
-    # ------------------------------------------------------------------ public evaluation
     def mass_matrix(
         self, t: float, q: object, qd: object | None = None
     ) -> np.ndarray | sps.csr_matrix:
         """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix."""
-        t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
-        M = sps.coo_matrix((self._dynamics(t, q, qd)[0], (self._mr, self._mc)), shape=(self.n,) * 2)
-        check_finite(t, "M", M)
-        return M.toarray() if self.dense else M.tocsr()
-
-    def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
-        """Q - h, shape (n,)."""
-        t, q, qd = self._state(t, q, qd)
-        out = self._dynamics(t, q, qd)[1]
-        check_finite(t, "Q - h", out)
-        return out
+        M = super().mass_matrix(t, q, qd)
+        return M.toarray() if self.dense else M
 
     def constraint_matrix(self, t: float, q: object) -> np.ndarray | sps.csr_matrix:
         """A(q, t), shape (m, n): dense when small, else CSR."""
-        t, q, qd = self._state(t, q, np.zeros(self.n))
-        A = sps.coo_matrix(
-            (self._constraints(t, q, qd)[0], (self._ar, self._ac)), shape=(self.m, self.n)
-        )
-        check_finite(t, "A", A)
-        return A.toarray() if self.dense else A.tocsr()
-
-    def constraint_residual(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
-        """Position residuals f(q,t) (0 for velocity constraints) and velocity residuals A q̇ + b."""
-        t, q, qd = self._state(t, q, qd)
-        f, g = self.residual(t, q, qd)
-        check_finite(t, "the constraint residual", f, g)
-        return f, g
-
-    def acceleration_residual(self, t: float, q: object, qd: object, qdd: object) -> np.ndarray:
-        """A q̈ + Ȧq̇ + ḃ, shape (m,): zero for accelerations that satisfy the constraints."""
-        t, q, qd = self._state(t, q, qd)
-        qdd = real_vector(qdd, "qdd", self.n)
-        avals, _, bias, _ = self._constraints(t, q, qd)
-        return bias + np.bincount(self._ar, weights=avals * qdd[self._ac], minlength=self.m)
-
-    def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
-        """Kinetic and potential energy (T, V)."""
-        return self._energies(*self._state(t, q, qd))
-
-    @property
-    def applied_power(self) -> bool:
-        """True when some applied force (``add_force``, ``add_generalized_force``) can do work."""
-        return any(part.power is not None for part in self._dyn)
-
-    def power(self, t: float, q: object, qd: object) -> float:
-        """Power of the applied forces, Qᵀq̇ (W), whose integral is the work W_nc in the energy
-        balance T + V − E₀ − W_nc.
-
-        Examples
-        --------
-        >>> import pfaff
-        >>> model = pfaff.models.rolling_ring(3, force=True).equations().compile(
-        ...     {"M": 1, "r": 0.5, "F": 2})
-        >>> q, qd = pfaff.models.ring_state(3, 0.5, theta=0.0, theta_dot=4.0)
-        >>> model.power(0.0, q, qd)  # F ẋ = 2 · (r θ̇)
-        4.0
-        """
-        t, q, qd = self._state(t, q, qd)
-        return self.power_function()(t, q, qd)
-
-    def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
-        """:meth:`power` without the argument checks, for an integrator's checked states
-        (the work integral evaluates it a few times per step: 4 µs instead of 18 µs on the ring)."""
-        kernels, p = [part.power for part in self._dyn if part.power is not None], self._p
-
-        def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
-            return math.fsum(float(k(t, q, qd, p)[0].sum()) for k in kernels)
-
-        return power
+        A = super().constraint_matrix(t, q)
+        return A.toarray() if self.dense else A
 
     def kkt_matrix(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """The symmetric augmented matrix [[M, Aᵀ], [A, 0]] and right-hand side [Q - h; -bias]."""
@@ -313,15 +181,13 @@ class NumericModel:
             return K, forcing, b, bias, f, K[n:, :n] @ qd + b
         mvals, forcing = self._dynamics(t, q, qd)
         avals, b, bias, f = self._constraints(t, q, qd)
-        g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=m)
-        data = np.concatenate([mvals, avals, avals])
-        if self.dense:
-            K = np.bincount(self._kkt_lin, weights=data, minlength=N * N).reshape(N, N).T
-        else:
-            vals = np.bincount(self._kkt_slot, weights=data, minlength=len(self._kkt_uniq))
-            K = sps.csc_matrix(
-                (vals, self._kkt_uniq % N, _indptr(self._kkt_uniq // N, N)), shape=(N, N)
-            )
+        g = b + self.a_matvec(avals, qd)
+        assert self._pattern is not None
+        K = (
+            self._pattern.dense(mvals, avals)
+            if self.dense
+            else self._pattern.assemble(mvals, avals)
+        )
         return K, forcing, b, bias, f, g
 
     def _solve_kkt(
@@ -374,17 +240,19 @@ class NumericModel:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f
         (:class:`pfaff.numeric.protocol.DynamicsModel`)."""
-        return self._solve(t, q, qd, alpha, beta, STATE_FLOOR, None)
+        return self._solve(t, q, qd, alpha, beta)
 
     def _solve(
         self,
         t: float,
         q: np.ndarray,
         qd: np.ndarray,
-        alpha: float,
-        beta: float,
-        floor: float,
-        scales: np.ndarray | None,
+        alpha: float = 0.0,
+        beta: float = 0.0,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+        floor: float = STATE_FLOOR,
+        scales: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         K, forcing, _, bias, f, g = self._kkt(t, q, qd)
         c = -bias
@@ -392,7 +260,10 @@ class NumericModel:
             c = c - 2.0 * alpha * g
         if beta:
             c = c - beta * beta * f
-        return self._solve_kkt(K, forcing, c, t, floor, scales)
+        qdd, lam = self._solve_kkt(K, forcing, c, t, floor, scales)
+        if out is not None:
+            out[:] = qdd
+        return qdd, lam
 
     def _row_scales(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
         """Reference constraint row sizes for the integrators' floor (:func:`pfaff.numeric.kkt.row_scales`)."""
@@ -420,9 +291,7 @@ class NumericModel:
         if self._fused is not None:
             _, _, _, _, f, g = self._kkt(t, q, qd)
             return f, g
-        avals, b, _, f = self._constraints(t, q, qd)
-        g = b + np.bincount(self._ar, weights=avals * qd[self._ac], minlength=self.m)
-        return f, g
+        return super().residual(t, q, qd)
 
     def linearize_constraints(
         self, t: float, q: np.ndarray, qd: np.ndarray, tol: float
@@ -486,7 +355,8 @@ class NumericModel:
 
         def slow(t: float, yl: list) -> list:
             y = np.array(yl)
-            return yl[n:] + self._solve(t, y[:n], y[n:], alpha, beta, floor, scales)[0].tolist()
+            qdd = self._solve(t, y[:n], y[n:], alpha, beta, floor=floor, scales=scales)[0]
+            return yl[n:] + qdd.tolist()
 
         if self._full_kkt or fk.rfn is None:
             return slow
@@ -626,14 +496,6 @@ class NumericModel:
             "Give it a mass or kinetic energy, or constrain it"
         )
 
-    def _energies(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[float, float]:
-        T = V = 0.0
-        for part in self._dyn:
-            Tk, Vk = part.energy(t, q, qd, self._p)
-            T += float(np.sum(Tk))
-            V += float(np.sum(Vk))
-        return T, V
-
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
     ) -> dict[str, np.ndarray]:
@@ -657,19 +519,7 @@ class NumericModel:
                 return self._fused_states(t, q, qd)
             except (np.linalg.LinAlgError, ConstraintError):
                 pass  # a redundant configuration somewhere: state by state below
-        k, n, m = len(t), self.n, self.m
-        out = {"qdd": np.zeros((k, n)), "multipliers": np.zeros((k, m))}
-        out.update({key: np.zeros((k, m)) for key in ("f", "g")})
-        out.update({key: np.zeros(k) for key in ("T", "V", "T0", "T2")})
-        zero = np.zeros(n)
-        for i in range(k):
-            out["qdd"][i], out["multipliers"][i] = self.solve(t[i], q[i], qd[i])
-            out["f"][i], out["g"][i] = self.residual(t[i], q[i], qd[i])
-            out["T"][i], out["V"][i] = self._energies(t[i], q[i], qd[i])
-            out["T0"][i] = self._energies(t[i], q[i], zero)[0]
-            out["T2"][i] = 0.5 * (out["T"][i] + self._energies(t[i], q[i], -qd[i])[0])
-        out["T2"] -= out["T0"]
-        return out
+        return super().evaluate_states(t, q, qd)
 
     def _fused_states(self, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> dict[str, np.ndarray]:
         fk, k, n, N = self._fused, len(t), self.n, self.n + self.m
@@ -731,10 +581,6 @@ def not_real(t: float) -> str:
     )
 
 
-def _indptr(col_of_entry: np.ndarray, N: int) -> np.ndarray:
-    return np.concatenate([[0], np.cumsum(np.bincount(col_of_entry, minlength=N))])
-
-
 class AccelerationField(OdeFunction):
     """y' = [q̇, q̈] of a :class:`NumericModel` for the integrators, with the rank-loss floor.
 
@@ -769,7 +615,10 @@ class AccelerationField(OdeFunction):
         n = self.model.n
         out = np.empty(2 * n)
         out[:n] = y[n:]
-        out[n:] = self.model._solve(t, y[:n], y[n:], self.alpha, self.beta, FLOOR, self.scales)[0]
+        m = self.model
+        out[n:] = m._solve(t, y[:n], y[n:], self.alpha, self.beta, floor=FLOOR, scales=self.scales)[
+            0
+        ]
         if not math.isfinite(out.sum()):
             raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
         return out

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg.blas as blas
 
+from pfaff.core.errors import raised_in_generated_code, undefined_at
 from pfaff.numeric.trig import sincos, workspace
 
 CHUNK = 1 << 15  # instances per kernel call
@@ -252,6 +253,9 @@ class StreamCode:
         ``angle_fn(q.., qd.., t)``: the angles whose sin and cos ``fn`` takes; None for none.
     angles : tuple
         The angle expressions (for reports and tests).
+    params : tuple of float
+        Parameter values ``fn`` takes last, at run time; empty when they are folded in (always,
+        unless a folded number would leave the double range).
     """
 
     const: list
@@ -260,6 +264,7 @@ class StreamCode:
     fn: Callable | None
     angle_fn: Callable | None
     angles: tuple = ()
+    params: tuple = ()
 
 
 class StreamKernel:
@@ -289,7 +294,7 @@ class StreamKernel:
         self.varying = list(code.varying)
         self.const: list[float | None] = list(code.const)
         self.angles = code.angles
-        self._fn, self._angle_fn = code.fn, code.angle_fn
+        self._fn, self._angle_fn, self._params = code.fn, code.angle_fn, code.params
         # per varying output: its row in the stored outputs, or -1 - its row in the partial sums
         self._slot, ns, nv = [], 0, 0
         for i in self.varying:
@@ -310,7 +315,7 @@ class StreamKernel:
             args = [take(c, q, lo, hi) for c in self.columns]
             args += [take(c, qd, lo, hi) for c in self.columns]
             trig = self._trig(args, t_, hi - lo) if self.angles else []
-            for j, r in zip(self._slot, self._fn(*args, t_, *trig), strict=True):
+            for j, r in zip(self._slot, self._fn(*args, t_, *trig, *self._params), strict=True):
                 if j >= 0:
                     out[j, lo:hi] = r  # type: ignore[index]
                 else:
@@ -346,7 +351,12 @@ class StreamKernel:
         if self._out is None:
             self._out = np.empty((self._n_stored, self.count))
         out = self._out
-        in_spans(self.count, self.chunk, lambda lo, hi: self._run(t_, q, qd, lo, hi))
+        try:
+            in_spans(self.count, self.chunk, lambda lo, hi: self._run(t_, q, qd, lo, hi))
+        except (ValueError, ArithmeticError) as e:  # an overflow in the user's equations, ...
+            if not raised_in_generated_code(e):
+                raise
+            raise undefined_at(e, t_) from None
         res: list = list(self.const)
         for j, i in zip(self._slot, self.varying, strict=True):
             res[i] = out[j] if j >= 0 else math.fsum(self._partial[-1 - j])

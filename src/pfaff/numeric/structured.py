@@ -122,30 +122,18 @@ class ConStreams:
     res: StreamKernel
 
 
-class StructuredModel:
-    """Compiled equations of motion of a system with families (see the module docstring).
+class StreamModel:
+    """The numeric model of any system over template streams: the shared part of both kinds.
 
-    Attributes
-    ----------
-    n, m : int
-    coordinate_names, multiplier_names, constraint_names : sequence of str
-        Made on demand (a family of 2^24 members has no list of names).
-    holonomic : ndarray of bool, shape (m,)
-    parameters : dict
-    solver : str
-        ``"triangular"`` or ``"sparse"``.
-    stats : dict
-
-    Examples
-    --------
-    >>> import numpy as np, pfaff
-    >>> ring = pfaff.models.rolling_ring(1000, force=True, family=True)
-    >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
-    >>> q, qd = pfaff.models.ring_state(1000, radius=0.5, theta=0.3)
-    >>> qdd, lam = model.accelerations(0.0, q, qd)
-    >>> model.solver, round(float(qdd[1]), 12), round(float(lam[0]), 12)
-    ('triangular', 2.0, -1.0)
+    Evaluation (M, Q − h, A, b, Ȧq̇ + ḃ, f, energies, power) runs the template kernels
+    (:class:`pfaff.numeric.streams.StreamKernel`) over index progressions or index arrays;
+    every checked method of :class:`pfaff.numeric.protocol.DynamicsModel` is here, and the
+    unchecked ones with the KKT solver a subclass chooses (``self._solver``):
+    :class:`StructuredModel` (families) and :class:`pfaff.NumericModel` (any system).
     """
+
+    solver: str
+    _solver: KKTSolver
 
     def __init__(
         self,
@@ -158,12 +146,11 @@ class StructuredModel:
         constraint_names: Sequence[str],
         holonomic: np.ndarray,
         parameters: dict[str, float],
-        p: int,
-        solver: str | None = None,
+        multiplier_names: Sequence[str] | None = None,
     ) -> None:
         self.n, self.m = n, m
         self.coordinate_names = coordinate_names
-        self.multiplier_names = LazySeq(
+        self.multiplier_names = multiplier_names or LazySeq(
             self.m,
             lambda i: f"lambda{i + 1}",
             lambda lo, hi: [f"lambda{i}" for i in range(lo + 1, hi + 1)],
@@ -172,44 +159,15 @@ class StructuredModel:
         self.holonomic = np.asarray(holonomic, dtype=bool).reshape(self.m)
         self.parameters = dict(parameters)
         self.dyn, self.con = dyn, con  # the blocks, read by the solvers
-        self.p = p  # ordinary (non-family) coordinates, first in q
         self.stats: dict = {"kkt_solves": 0}
         self._tmp: np.ndarray | None = None
         self._zero: np.ndarray | None = None
-        self.solver = "none"
-        self._pattern: _Pattern | None = None
-        if solver != "none":
-            plan = triangular_plan(self) if solver in (None, "triangular") else None
-            if solver == "triangular" and plan is None:
-                raise ModelError("the constraints have no square banded triangular structure")
-            self._solver: KKTSolver = (
-                TriangularSolver(self, plan) if plan is not None else SparseSolver(n, m)
-            )
-            if plan is None:
-                self._pattern = _Pattern(self)
-            self.solver = self.stats["solver"] = self._solver.name
-            for part in self.dyn:
-                part.kernel.warm()
-            for part in self.con:
-                part.acc.warm()
-            self.scratch().fill(0.0)
-
-    def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
-        """True when A has the triangular structure with non-zero pivots at (t, q), which proves
-        rank m; False when it has no such structure (the rank must be found otherwise).
-
-        Raises :class:`pfaff.ConstraintError` on a zero pivot.
-        """
-        plan = triangular_plan(self)
-        if plan is None:
-            return False
-        avals, _ = self._accel_constraints(t, np.asarray(q, dtype=float), self._zeros())
-        TriangularSolver(self, plan).factor(avals)
-        return True
+        self._pattern: KKTPattern | None = None
+        self._names = coordinate_names if isinstance(coordinate_names, list) else None
 
     # ------------------------------------------------------------------ validation
     def _state(self, t: float, q: object, qd: object) -> tuple[float, np.ndarray, np.ndarray]:
-        return check_state(t, q, qd, self.n)
+        return check_state(t, q, qd, self.n, self._names)
 
     # ------------------------------------------------------------------ raw evaluation
     def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, np.ndarray]:
@@ -225,6 +183,17 @@ class StructuredModel:
                 else:
                     scatter_add(f, ix, v)
         return mvals, f
+
+    def _constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """A-entry values per block, and b, Ȧq̇ + ḃ and f as vectors (m,): all of them at once."""
+        avals, b, bias, f = [], np.zeros(self.m), np.zeros(self.m), np.zeros(self.m)
+        for part in self.con:
+            outs = part.res(t, q, qd)
+            na = len(part.cols)
+            avals.append(outs[:na])
+            for vec, val in zip((b, bias, f), outs[na:], strict=True):
+                scatter_add(vec, part.rows, val)
+        return avals, b, bias, f
 
     def _accel_constraints(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, list]:
         """A-entry values per block and bias (Ȧq̇ + ḃ) per block."""
@@ -510,17 +479,7 @@ class StructuredModel:
         return qdd, lam
 
     def check_determined(self, t: float, q: object, qd: object) -> None:
-        """Validate the state; the inertia test of :meth:`NumericModel.check_determined` is not run.
-
-        Why: a family model has up to 2^24 coordinates, and the test there (ZᵀMZ positive
-        definite, Z a basis of null(A)) is O(N³) dense, or O(nnz) with M and A assembled, which
-        these models never do. Nor is it needed for an undetermined acceleration: the triangular
-        solver determines every family coordinate from the constraints (it raises
-        :class:`ConstraintError` on a zero pivot of A_L) and solves the p ordinary ones from the
-        p×p projected matrix TᵀMT, which raises on a singular one; the sparse solver's SuperLU
-        raises on an exactly singular augmented matrix. Negative particle masses are refused when
-        the parameter values are given (``compile``).
-        """
+        """Validate the state (subclasses test more: :meth:`pfaff.NumericModel.check_determined`)."""
         self._state(t, q, qd)
 
     def _zeros(self) -> np.ndarray:
@@ -543,10 +502,97 @@ def _coo(pairs: list, vals: list, shape: tuple[int, int]) -> sps.coo_matrix:
     )
 
 
+class StructuredModel(StreamModel):
+    """Compiled equations of motion of a system with families (see the module docstring).
+
+    Attributes
+    ----------
+    n, m : int
+    coordinate_names, multiplier_names, constraint_names : sequence of str
+        Made on demand (a family of 2^24 members has no list of names).
+    holonomic : ndarray of bool, shape (m,)
+    parameters : dict
+    solver : str
+        ``"triangular"`` or ``"sparse"``.
+    stats : dict
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> ring = pfaff.models.rolling_ring(1000, force=True, family=True)
+    >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
+    >>> q, qd = pfaff.models.ring_state(1000, radius=0.5, theta=0.3)
+    >>> qdd, lam = model.accelerations(0.0, q, qd)
+    >>> model.solver, round(float(qdd[1]), 12), round(float(lam[0]), 12)
+    ('triangular', 2.0, -1.0)
+    """
+
+    def __init__(
+        self,
+        n: int,
+        m: int,
+        dyn: list[DynStreams],
+        con: list[ConStreams],
+        *,
+        coordinate_names: Sequence[str],
+        constraint_names: Sequence[str],
+        holonomic: np.ndarray,
+        parameters: dict[str, float],
+        p: int,
+        solver: str | None = None,
+    ) -> None:
+        super().__init__(
+            n, m, dyn, con, coordinate_names=coordinate_names, constraint_names=constraint_names,
+            holonomic=holonomic, parameters=parameters,
+        )  # fmt: skip
+        self.p = p  # ordinary (non-family) coordinates, first in q
+        self.solver = "none"
+        if solver != "none":
+            plan = triangular_plan(self) if solver in (None, "triangular") else None
+            if solver == "triangular" and plan is None:
+                raise ModelError("the constraints have no square banded triangular structure")
+            self._solver = TriangularSolver(self, plan) if plan is not None else SparseSolver(n, m)
+            if plan is None:
+                self._pattern = KKTPattern(self)
+            self.solver = self.stats["solver"] = self._solver.name
+            for part in self.dyn:
+                part.kernel.warm()
+            for part in self.con:
+                part.acc.warm()
+            self.scratch().fill(0.0)
+
+    def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
+        """True when A has the triangular structure with non-zero pivots at (t, q), which proves
+        rank m; False when it has no such structure (the rank must be found otherwise).
+
+        Raises :class:`pfaff.ConstraintError` on a zero pivot.
+        """
+        plan = triangular_plan(self)
+        if plan is None:
+            return False
+        avals, _ = self._accel_constraints(t, np.asarray(q, dtype=float), self._zeros())
+        TriangularSolver(self, plan).factor(avals)
+        return True
+
+    def check_determined(self, t: float, q: object, qd: object) -> None:
+        """Validate the state; the inertia test of :meth:`NumericModel.check_determined` is not run.
+
+        Why: a family model has up to 2^24 coordinates, and the test there (ZᵀMZ positive
+        definite, Z a basis of null(A)) is O(N³) dense, or O(nnz) with M and A assembled, which
+        these models never do. Nor is it needed for an undetermined acceleration: the triangular
+        solver determines every family coordinate from the constraints (it raises
+        :class:`ConstraintError` on a zero pivot of A_L) and solves the p ordinary ones from the
+        p×p projected matrix TᵀMT, which raises on a singular one; the sparse solver's SuperLU
+        raises on an exactly singular augmented matrix. Negative particle masses are refused when
+        the parameter values are given (``compile``).
+        """
+        self._state(t, q, qd)
+
+
 class _StreamField(OdeFunction):
     """y' = [q̇, q̈] of a :class:`StructuredModel`: q̈ written in place, no λ computed."""
 
-    def __init__(self, model: StructuredModel, alpha: float, beta: float) -> None:
+    def __init__(self, model: StreamModel, alpha: float, beta: float) -> None:
         self.model, self.alpha, self.beta = model, alpha, beta
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
@@ -559,11 +605,11 @@ class _StreamField(OdeFunction):
         return out
 
 
-class _Pattern:
-    """The augmented matrix [[M, Aᵀ], [A, 0]] of a family model in CSC, its pattern fixed at
-    build time: a solve only scatters the entry values (duplicates summed)."""
+class KKTPattern:
+    """The augmented matrix [[M, Aᵀ], [A, 0]] of a stream model, its pattern fixed at build
+    time: an assembly only scatters the entry values (duplicates summed), densely or in CSC."""
 
-    def __init__(self, model: StructuredModel) -> None:
+    def __init__(self, model: StreamModel) -> None:
         self.model = model
         n, m = model.n, model.m
         N = self.N = n + m
@@ -578,12 +624,14 @@ class _Pattern:
                 rows += [rr, cc]
                 cols += [cc, rr]
         cat = lambda xs: np.concatenate(xs) if xs else np.zeros(0, np.int64)  # noqa: E731
-        uniq, self.slot = np.unique(cat(cols) * N + cat(rows), return_inverse=True)
+        self.lin = cat(cols) * N + cat(rows)  # column-major: sorted order is CSC order
+        uniq, self.slot = np.unique(self.lin, return_inverse=True)
+        self.slot = self.slot.ravel()
         self.size = uniq.size
-        self.indices = uniq % N  # sorted by (col, row): CSC order
+        self.indices = uniq % N
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(uniq // N, minlength=N))])
 
-    def assemble(self, mvals: list, avals: list) -> sps.csc_matrix:
+    def _data(self, mvals: list, avals: list) -> np.ndarray:
         data = []
         for part, vals in zip(self.model.dyn, mvals, strict=True):
             for (r, c), v in zip(part.mass, part.mass_values(vals), strict=True):
@@ -592,8 +640,17 @@ class _Pattern:
             for c, v in zip(part.cols, vals, strict=True):
                 d = np.broadcast_to(np.asarray(v, float), (_count(part.rows, c),))
                 data += [d, d]
-        vals = np.bincount(self.slot.ravel(), weights=np.concatenate(data), minlength=self.size)
+        return np.concatenate(data) if data else np.zeros(0)
+
+    def assemble(self, mvals: list, avals: list) -> sps.csc_matrix:
+        """K in CSC, shape (N, N)."""
+        vals = np.bincount(self.slot, weights=self._data(mvals, avals), minlength=self.size)
         return sps.csc_matrix((vals, self.indices, self.indptr), shape=(self.N, self.N))
+
+    def dense(self, mvals: list, avals: list) -> np.ndarray:
+        """K as a dense array, shape (N, N)."""
+        N, data = self.N, self._data(mvals, avals)
+        return np.bincount(self.lin, weights=data, minlength=N * N).reshape(N, N).T
 
 
 def _count(a: Index | np.ndarray, b: Index | np.ndarray) -> int:
