@@ -181,13 +181,13 @@ class NumericModel(StreamModel):
             return K, forcing, b, bias, f, K[n:, :n] @ qd + b
         mvals, forcing = self._dynamics(t, q, qd)
         avals, b, bias, f = self._constraints(t, q, qd)
-        g = b + self.a_matvec(avals, qd)
         assert self._pattern is not None
-        K = (
-            self._pattern.dense(mvals, avals)
-            if self.dense
-            else self._pattern.assemble(mvals, avals)
-        )
+        if self.dense:
+            K = self._pattern.dense(mvals, avals)
+            g = K[n:, :n] @ qd + b
+        else:
+            K = self._pattern.assemble(mvals, avals)
+            g = b + self.a_matvec(avals, qd)
         return K, forcing, b, bias, f, g
 
     def _solve_kkt(
