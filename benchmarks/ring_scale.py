@@ -56,8 +56,8 @@ def best(fn, repeat: int = 3) -> float:
 
 def floor_time(model, arrays: list) -> float:
     """Time to copy every unavoidable array once (state, results, varying matrix values)."""
-    varying = [part.kernel._out for part in model._dyn if part.kernel._out is not None]
-    varying += [part.acc._out for part in model._con if part.acc._out is not None]
+    varying = [part.kernel._out for part in model.dyn if part.kernel._out is not None]
+    varying += [part.acc._out for part in model.con if part.acc._out is not None]
     todo = list(arrays) + varying
     return best(lambda: [a.copy() for a in todo])
 

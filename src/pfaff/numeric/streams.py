@@ -31,6 +31,9 @@ PARALLEL_FROM = 1 << 20
 # OpenBLAS runs level-1 calls (daxpy, ddot) below 10,000 elements on the calling thread; on longer
 # vectors it wakes its own threads, whose wake-up and spin-wait cost more than the call at 2^16
 # elements (a solve at N = 65536 took 16 ms instead of 2.7 ms) and compete with the kernel threads.
+# threadpoolctl's limit(1) around a solve does the same at a cost: entering and leaving it took
+# 10 µs per BLAS library (two: NumPy's and SciPy's), a ring solve 150 -> 184 µs at N = 2^10 and
+# 1304 -> 1349 µs at 2^16 (measured 2026-11-24), so the calls are cut into blocks instead.
 BLAS_BLOCK = 8192
 SINCOS_FROM = 1 << 12  # kernels over this many instances take sin and cos from trig.sincos
 SPAN = 1 << 17  # elements per task of the streaming passes run on the threads (1 MiB)
