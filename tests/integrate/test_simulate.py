@@ -449,6 +449,29 @@ def test_consistent_state_impossible(pend: pfaff.NumericModel) -> None:
         cs(pend, [2.0, -1.0], [0.0, 0.0], ["x"])  # |x| > L
 
 
+def test_consistent_state_stops_when_the_residual_stops_falling(
+    pend: pfaff.NumericModel, monkeypatch
+) -> None:
+    """No solution and a huge iteration budget: the projection's policy stops at the first
+    step that does not reduce the residual (a handful of Newton steps), then refuses."""
+    import pfaff.integrate.initial as initial
+
+    calls = {"n": 0}
+    real = initial.newton_projection
+
+    def counting(linearize, *args, **kw):
+        def counted(q, qd):
+            calls["n"] += 1
+            return linearize(q, qd)
+
+        return real(counted, *args, **kw)
+
+    monkeypatch.setattr(initial, "newton_projection", counting)
+    with pytest.raises(pfaff.ConstraintError, match="no consistent state"):
+        _consistent_state()(pend, [2.0, -1.0], [0.0, 0.0], ["x"], max_iter=10**9)
+    assert calls["n"] < 100
+
+
 # ---------------------------------------------------------------------------------- 11. stats
 @pytest.mark.parametrize("method", METHODS)
 def test_stats(pend: pfaff.NumericModel, method: str) -> None:

@@ -10,6 +10,7 @@ import numpy as np
 
 from pfaff import models
 from pfaff.integrate.simulation import simulate
+from pfaff.numeric.protocol import DynamicsModel
 from pfaff.results.figures import MAX_LINES
 from pfaff.results.trajectory import Trajectory
 
@@ -47,7 +48,7 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
 TRAJECTORY_BYTES = 1 << 30
 
 
-def _run(model: Any, q0, qd0, opts: dict) -> tuple[Trajectory, float]:
+def _run(model: DynamicsModel, q0, qd0, opts: dict) -> tuple[Trajectory, float]:
     t0 = time.perf_counter()
     fit = max(11, TRAJECTORY_BYTES // (48 * (model.n + model.m)))
     t_eval = np.linspace(0.0, opts["t_end"], opts.get("points", min(401, fit)))

@@ -100,14 +100,13 @@ def schur_solver(
     acon: list[tuple[int, int]],
     *,
     damped: bool = False,
-    floor: bool = False,
 ) -> Callable[..., list[float]]:
     """Generate ``solve(*mass_values, *A_values, *F, *c) -> q̈ (list of n floats)``.
 
     With ``damped=True`` the function takes one more argument ``shift`` and solves with
-    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.numeric.projection`). With
-    ``floor=True`` it takes m + 1 more arguments ``tau0 … tau{m-1}, cap`` and floors the j-th
-    pivot of S at min(tau_j, cap · max diag S) (accelerations through rank loss, :mod:`pfaff.numeric.kkt`).
+    S + shift·trace(S)·I (the damped minimum-norm correction of :mod:`pfaff.numeric.projection`).
+    (The floored solve of the right-hand side is generated inside the fused kernel from
+    :func:`schur_source` with ``tau``.)
 
     Parameters
     ----------
@@ -126,12 +125,8 @@ def schur_solver(
     Ms = [f"m{s}" for s in range(len(mass))]
     As = [f"a{s}" for s in range(len(acon))]
     Fs, cs = [f"F{i}" for i in range(n)], [f"c{i}" for i in range(m)]
-    tau = [f"tau{i}" for i in range(m)] if floor else None
-    lines, out = schur_source(
-        mass, acon, Ms, As, Fs, cs, shift="shift" if damped else None, tau=tau, cap="cap"
-    )
-    extra = (["shift"] if damped else []) + ([*tau, "cap"] if tau is not None else [])
-    args = ", ".join(Ms + As + Fs + cs + extra)
+    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, shift="shift" if damped else None)
+    args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []))
     src = f"def solve({args}):\n" + "\n".join(lines) + f"\n    return [{', '.join(out)}]\n"
     namespace: dict = dict(NAMESPACE)
     exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
