@@ -103,6 +103,23 @@ def test_projection_is_mass_orthogonal(model: DynamicsModel) -> None:
     assert np.abs(f).max() < 1e-12 and np.abs(g).max() < 1e-12
 
 
+def test_model_project_is_the_projection(model) -> None:
+    """``model.project`` at one state: the same algorithm and result as the integrators' Projector."""
+    rng = np.random.default_rng(9)
+    q, qd = _state()
+    q0, qd0 = q + rng.normal(0, 1e-3, q.shape), qd + rng.normal(0, 1e-2, q.shape)
+    q1, qd1, steps = model.project(0.0, q0, qd0)
+    q2, qd2, changed = Projector(model)(0.0, q0, qd0)
+    assert steps >= 1 and changed
+    np.testing.assert_array_equal(q1, q2)
+    np.testing.assert_array_equal(qd1, qd2)
+    f, g = model.constraint_residual(0.0, q1, qd1)
+    assert np.abs(f).max() < 1e-12 and np.abs(g).max() < 1e-12
+    assert model.project(0.0, q1, qd1)[2] == 0  # on the manifold: nothing to do
+    with pytest.raises(pfaff.OptionError, match="`tol`"):
+        model.project(0.0, q1, qd1, tol="1e-9")
+
+
 def test_simulation_closed_form(model: DynamicsModel) -> None:
     """x(t) = x0 + ẋ0 t + F t²/(4M) and λ_1 = −F/2 along a projected run."""
     q0, qd0 = _state(theta=0.0, theta_dot=0.5)

@@ -24,11 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ModelError, StateError
+from pfaff.core.errors import ModelError, OptionError, StateError
 from pfaff.core.lazy import LazySeq
-from pfaff.numeric.checks import check_finite, check_state, real_vector
+from pfaff.numeric.checks import check_finite, check_state, real_number, real_vector
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
-from pfaff.numeric.projection import ArrayLinearization
+from pfaff.numeric.projection import ArrayLinearization, newton_projection
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.streams import Index, StreamKernel, add_product, indices, scatter_add, take
 from pfaff.numeric.triangular import TriangularSolver, triangular_plan
@@ -419,6 +419,40 @@ class StreamModel:
         f = np.where(self.holonomic, f, 0.0)
         return ArrayLinearization(
             f, g, np.sqrt(sq), tol, correct, correct, lambda v: self.residual(t, q, v)[1]
+        )
+
+    def project(
+        self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """Project (q, q̇) onto f(q, t) = 0 and A q̇ + b = 0, mass-orthogonally.
+
+        The projection the integrators use (:func:`pfaff.numeric.projection.newton_projection`)
+        at one state: Newton on the positions, then the velocities. Returns the new q, q̇ and
+        the number of Newton steps (1 when only the velocities moved; 0: nothing changed).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+        >>> q, qd, steps = model.project(0.0, [0.6, -0.9], [1.0, 1.0])
+        >>> bool(abs(q @ q - 1) < 1e-12 and abs(q @ qd) < 1e-12), steps > 0
+        (True, True)
+        """
+        t, q, qd = self._state(t, q, qd)
+        tol = real_number(tol, "tol", OptionError)
+        if (
+            not tol > 0
+            or isinstance(max_iter, bool)
+            or not isinstance(max_iter, int)
+            or max_iter < 0
+        ):
+            raise OptionError(
+                f"`tol` must be > 0 and `max_iter` an integer >= 0; got {tol!r}, {max_iter!r:.80}"
+            )
+        if not self.m:
+            return q, qd, 0
+        return newton_projection(
+            lambda q_, qd_: self.linearize_constraints(t, q_, qd_, tol), q, qd, max_iter=max_iter
         )
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
