@@ -127,12 +127,12 @@ def _ring_family(
     return ring
 
 
-def _count(value: object, name: str) -> int:
-    """A number of particles: a whole number from 2 to 2^31 - 1."""
+def _count(value: object, name: str, low: int = 2) -> int:
+    """A number of particles: a whole number from ``low`` to 2^31 - 1."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
         raise ModelTypeError(f"`{name}` must be a whole number, got {value!r:.80}")
-    if not 2 <= int(value) < 2**31:
-        raise ModelError(f"`{name}` must be between 2 and 2^31 - 1, got {value}")
+    if not low <= int(value) < 2**31:
+        raise ModelError(f"`{name}` must be between {low} and 2^31 - 1, got {value}")
     return int(value)
 
 
@@ -241,4 +241,45 @@ def pendulum(*, mass: object = None, length: object = None, gravity: object = No
     pos = [L * sp.sin(th), -L * sp.cos(th)]
     s.add_particle(m, pos, name="bob")
     s.add_potential_energy(m * g * pos[1], name="gravity")
+    return s
+
+
+def n_link_pendulum_on_cart(n: int) -> System:
+    """A cart on a line carrying a chain of n point-mass links, pushed by a force F.
+
+    The planar chain of SymPy's ``sympy.physics.mechanics.models.n_link_pendulum_on_cart``: the
+    cart q0 (mass m0) moves along x; link i has an absolute angle q_i from the upward vertical
+    (counter-clockwise), length l_{i-1} and its mass m_i at its end; gravity g points along −y,
+    F pushes the cart. With p_0 = (q0, 0) and p_i = p_{i−1} + l_{i−1}(−sin q_i, cos q_i):
+
+        T = Σ_i m_i |ṗ_i|² / 2,   V = g Σ_i m_i y_i,   Q_{q0} = F.
+
+    Parameters
+    ----------
+    n : int
+        Number of links, at least 1.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> s = pfaff.models.n_link_pendulum_on_cart(2)
+    >>> [str(q.func) for q in s.coordinates], sorted(str(p) for p in s.equations().parameters)
+    (['q0', 'q1', 'q2'], ['F', 'g', 'l0', 'l1', 'm0', 'm1', 'm2'])
+    """
+    n = _count(n, "n", low=1)
+    q = coordinates(f"q0:{n + 1}")
+    m = sp.symbols(f"m0:{n + 1}")
+    length = sp.symbols(f"l0:{n}")
+    g, F = sp.symbols("g F")
+    s = System(list(q), name=f"{n}-link pendulum on a cart")
+    x, y = q[0], sp.S.Zero
+    s.add_particle(m[0], [x, y], name="cart")
+    V = sp.S.Zero
+    for i in range(1, n + 1):
+        x = x - length[i - 1] * sp.sin(q[i])
+        y = y + length[i - 1] * sp.cos(q[i])
+        s.add_particle(m[i], [x, y], name=f"bob{i}")
+        V += m[i] * g * y
+    s.add_potential_energy(V, name="gravity")
+    s.add_generalized_force(q[0], F, name="push")
     return s

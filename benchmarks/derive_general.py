@@ -1,0 +1,168 @@
+"""Benchmark: a general system (no family) from model to numbers, pfaff against SymPy.
+
+The system is the planar n-link pendulum on a cart of
+``sympy.physics.mechanics.models.n_link_pendulum_on_cart`` (cart force F, no joint torques), built
+in pfaff as :func:`pfaff.models.n_link_pendulum_on_cart`. Per n one row, CPU seconds:
+
+``pfaff``
+    model + ``equations()`` + ``compile(values)`` + one ``accelerations`` call.
+``kane``
+    SymPy's model function (``KanesMethod`` and ``kanes_equations``) + ``lambdify(cse=True)`` of
+    ``mass_matrix_full`` and ``forcing_full`` + one ``numpy.linalg.solve``.
+``lagrange``
+    ``LagrangesMethod`` on the same particles (``Lagrangian``, the push in ``forcelist``),
+    ``form_lagranges_equations()`` + ``lambdify(cse=True)`` of ``mass_matrix`` and ``forcing`` +
+    one solve (up to ``--lagrange-max``; it is the slow one).
+
+then the ratio pfaff / kane (below 1: pfaff is faster) and the largest difference of q̈ between
+pfaff and Kane at a random state (they must agree to 1e-9 relative). SymPy's cache is cleared
+before every measurement. Then one right-hand side (q̈, and λ for pfaff) in µs: pfaff's compiled
+model against the lambdified Kane mass matrix and forcing + ``numpy.linalg.solve``.
+
+Run (from the project root)::
+
+    python benchmarks/derive_general.py                 # n = 1, 2, 4, 6, 8, 10
+    python benchmarks/derive_general.py --n 1 2 4 --lagrange-max 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import time
+import timeit
+
+import numpy as np
+import sympy as sp
+import sympy.physics.mechanics as me
+from sympy.core.cache import clear_cache
+from sympy.physics.mechanics.models import n_link_pendulum_on_cart
+
+import pfaff
+
+
+def _values(n: int, rng: np.random.Generator) -> dict[str, float]:
+    vals = {f"m{i}": float(rng.uniform(0.5, 2.0)) for i in range(n + 1)}
+    vals |= {f"l{i}": float(rng.uniform(0.5, 1.5)) for i in range(n)}
+    return vals | {"g": 9.81, "F": 0.7}
+
+
+def _fresh() -> float:
+    clear_cache()
+    gc.collect()
+    return time.process_time()
+
+
+def run_pfaff(n: int, vals: dict, q: np.ndarray, u: np.ndarray):
+    t0 = _fresh()
+    model = pfaff.models.n_link_pendulum_on_cart(n).equations().compile(vals)
+    qdd, _ = model.accelerations(0.0, q, u)
+    return time.process_time() - t0, qdd, model
+
+
+def _lambdified(M, f, q, u, syms: list, F_t):
+    args = [*q, *u, *syms]
+    fM = sp.lambdify(args, M.subs(F_t, sp.Symbol("F")), modules="numpy", cse=True)
+    ff = sp.lambdify(args, f.subs(F_t, sp.Symbol("F")), modules="numpy", cse=True)
+    return fM, ff
+
+
+def run_kane(n: int, vals: dict, q0: np.ndarray, u0: np.ndarray):
+    t0 = _fresh()
+    kane = n_link_pendulum_on_cart(n, cart_force=True, joint_torques=False)
+    q, u = kane.q[:, 0], kane.u[:, 0]
+    F_t = me.dynamicsymbols("F")
+    names = [f"m{i}" for i in range(n + 1)] + [f"l{i}" for i in range(n)] + ["g", "F"]
+    syms = [sp.Symbol(s) for s in names]
+    fM, ff = _lambdified(kane.mass_matrix_full, kane.forcing_full, q, u, syms, F_t)
+    p = [vals[s] for s in names]
+    x = np.linalg.solve(fM(*q0, *u0, *p), np.ravel(ff(*q0, *u0, *p)))
+    cpu = time.process_time() - t0
+    rhs = lambda: np.linalg.solve(fM(*q0, *u0, *p), np.ravel(ff(*q0, *u0, *p)))  # noqa: E731
+    return cpu, x[n + 1 :], rhs
+
+
+def run_lagrange(n: int, vals: dict, q0: np.ndarray, u0: np.ndarray):
+    t0 = _fresh()
+    q = me.dynamicsymbols(f"q:{n + 1}")
+    qd = [qi.diff(me.dynamicsymbols._t) for qi in q]
+    m = sp.symbols(f"m:{n + 1}")
+    length = sp.symbols(f"l:{n}")
+    g, F = sp.symbols("g F")
+    N = me.ReferenceFrame("N")
+    origin = me.Point("O")
+    origin.set_vel(N, 0)
+    P = origin.locatenew("P0", q[0] * N.x)
+    P.set_vel(N, qd[0] * N.x)
+    parts = [me.Particle("pa0", P, m[0])]
+    loads = [(P, F * N.x - m[0] * g * N.y)]
+    for i in range(1, n + 1):
+        B = N.orientnew(f"B{i}", "Axis", [q[i], N.z])
+        B.set_ang_vel(N, qd[i] * N.z)
+        Pi = P.locatenew(f"P{i}", length[i - 1] * B.y)
+        Pi.v2pt_theory(P, N, B)
+        parts.append(me.Particle(f"pa{i}", Pi, m[i]))
+        loads.append((Pi, -m[i] * g * N.y))
+        P = Pi
+    lm = me.LagrangesMethod(me.Lagrangian(N, *parts), q, forcelist=loads, frame=N)
+    lm.form_lagranges_equations()
+    syms = [*m, *length, g, F]
+    qs = [sp.Symbol(f"_q{i}") for i in range(n + 1)]
+    us = [sp.Symbol(f"_u{i}") for i in range(n + 1)]
+    rep = {**dict(zip(qd, us, strict=True)), **dict(zip(q, qs, strict=True))}
+    M, f = lm.mass_matrix.xreplace(rep), lm.forcing.xreplace(rep)
+    fM = sp.lambdify([*qs, *us, *syms], M, modules="numpy", cse=True)
+    ff = sp.lambdify([*qs, *us, *syms], f, modules="numpy", cse=True)
+    names = [f"m{i}" for i in range(n + 1)] + [f"l{i}" for i in range(n)] + ["g", "F"]
+    p = [vals[s] for s in names]
+    x = np.linalg.solve(fM(*q0, *u0, *p), np.ravel(ff(*q0, *u0, *p)))
+    return time.process_time() - t0, x
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, nargs="+", default=[1, 2, 4, 6, 8, 10])
+    ap.add_argument("--lagrange-max", type=int, default=8)
+    args = ap.parse_args()
+    # lazy imports and first-call costs of both tools, untimed
+    warm = _values(1, np.random.default_rng(0))
+    run_pfaff(1, warm, np.zeros(2), np.zeros(2))
+    run_kane(1, warm, np.zeros(2), np.zeros(2))
+    print("n-link pendulum on a cart, pushed cart; CPU s from model to one q̈ (SymPy cache cleared)")
+    head = f"{'n':>3} {'pfaff':>8} {'kane':>8} {'lagrange':>9} {'pfaff/kane':>11} {'|Δq̈| rel':>10}"
+    print(head)
+    print("-" * len(head))
+    last = None
+    ok = True
+    for n in args.n:
+        rng = np.random.default_rng(n)
+        vals = _values(n, rng)
+        q, u = rng.uniform(-1.0, 1.0, n + 1), rng.uniform(-1.0, 1.0, n + 1)
+        tp, qdd, model = run_pfaff(n, vals, q, u)
+        tk, qdd_k, rhs = run_kane(n, vals, q, u)
+        lag = "-"
+        if n <= args.lagrange_max:
+            tl, qdd_l = run_lagrange(n, vals, q, u)
+            lag = f"{tl:9.3f}"
+            ok &= bool(np.allclose(qdd_l, qdd_k, rtol=1e-9, atol=1e-9))
+        err = float(np.max(np.abs(qdd - qdd_k)) / max(1.0, np.max(np.abs(qdd_k))))
+        ok &= err <= 1e-9
+        print(f"{n:3d} {tp:8.3f} {tk:8.3f} {lag:>9} {tp / tk:11.2f} {err:10.1e}")
+        last = (n, model, rhs, q, u)
+    if last is not None:
+        n, model, rhs, q, u = last
+        y = np.concatenate([q, u])
+        fun = model.ode_function()
+        for name, fn in (
+            ("pfaff q̈ + λ (accelerations)", lambda: model.accelerations(0.0, q, u)),
+            ("pfaff ODE right-hand side", lambda: fun(0.0, y)),
+            ("SymPy Kane lambdified + solve", rhs),
+        ):
+            k = 2000
+            us = min(timeit.repeat(fn, number=k, repeat=3)) / k * 1e6
+            print(f"one right-hand side, n = {n}: {name:32s} {us:9.1f} µs")
+    print(f"accelerations agree with Kane (and Lagrange) to 1e-9: {'OK' if ok else 'FAIL'}")
+
+
+if __name__ == "__main__":
+    main()
