@@ -10,7 +10,7 @@ precomputed indices. The result is checked against the template kernels before i
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 import sympy as sp
@@ -61,15 +61,16 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     )
     plain = [sp.sympify(e).xreplace(rule).xreplace(qrule) for e in exprs]
     args = [t, *qs, *qds, *eom.parameters]
-    fn = sp.lambdify(args, plain, modules="math", cse=True, docstring_limit=0)
-    vfn = sp.lambdify(args, plain, modules="numpy", cse=True, docstring_limit=0)
+    body, outs, names = _shared_code(plain, args, n)
+    fn = _function("fn", names, body, outs, {"math": math})
+    vfn = _vectorized(names, body, outs, plain, args)
     T, V = (
         sp.sympify(e).xreplace(rule).xreplace(qrule)
         for e in (eom.kinetic_energy, eom.potential_energy)
     )
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
-    rfn = _rhs_function(plain, mass, acon, n, m, args, qds)
+    rfn = _rhs_function(body, outs, mass, acon, n, m, len(args) - 2 * n - 1)
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
     index, source = [], []
@@ -96,54 +97,92 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     )
 
 
-def _rhs_function(
-    plain: list, mass: list, acon: list, n: int, m: int, args: list, qds: list
-) -> Callable | None:
-    """``rfn`` (see :class:`FusedKernel`) from the plain output expressions, or None."""
-    g = [sp.S.Zero] * m
-    for s, (i, j) in enumerate(acon, start=len(mass)):
-        g[i] += plain[s] * qds[j]
-    off = len(mass) + len(acon)
-    neg_bias = plain[off + n : off + n + m]
-    b, f = plain[off + n + m : off + n + 2 * m], plain[off + n + 2 * m :]
-    alpha, beta = sp.Symbol("_alpha"), sp.Symbol("_beta")
-    c = [
-        nb - 2 * alpha * (gi + bi) - beta**2 * fi
-        for nb, gi, bi, fi in zip(neg_bias, g, b, f, strict=True)
+def _shared_code(exprs: list, args: list, n: int) -> tuple[list[str], list[str], list[str]]:
+    """One common-subexpression pass over all outputs, printed once: the body lines, the output
+    expressions and the argument names (``_t, _y0 … _y{2n-1}, _p0 …``) that every fused
+    function is built from (a separate ``cse`` + ``lambdify`` per function took half of
+    ``compile()`` on a bicycle-sized model)."""
+    names = [
+        "_t",
+        *(f"_y{i}" for i in range(2 * n)),
+        *(f"_p{k}" for k in range(len(args) - 1 - 2 * n)),
     ]
-    try:
-        return _rhs_factory(plain[: off + n] + c, mass, acon, n, m, args, (alpha, beta))
-    except Exception:  # something the printer cannot write: the array path
-        return None
-
-
-def _rhs_factory(
-    exprs: list, mass: list, acon: list, n: int, m: int, args: list, ab: tuple
-) -> Callable:
-    """Generate ``rfn`` (see :class:`FusedKernel`): the fused kernel and the Schur solve in one."""
-    t_, qs, qds, params = args[0], args[1 : n + 1], args[n + 1 : 2 * n + 1], args[2 * n + 1 :]
-    P = [sp.Symbol(f"_p{i}") for i in range(len(params))]
-    rule = {**dict(zip(params, P, strict=True)), t_: sp.Symbol("_t")}
-    rule.update({ab[0]: sp.Symbol("_alpha"), ab[1]: sp.Symbol("_beta")})
-    rule.update({q: sp.Symbol(f"_y{i}") for i, q in enumerate([*qs, *qds])})
-    repl, red = sp.cse([sp.sympify(e).xreplace(rule) for e in exprs], sp.numbered_symbols("_x"))
+    rule = {a: sp.Symbol(name) for a, name in zip(args, names, strict=True)}
+    repl, red = sp.cse([e.xreplace(rule) for e in exprs], sp.numbered_symbols("_x"))
     pr = PythonCodePrinter({"standard": "python3"})
+    body = [f"{pr.doprint(x)} = {pr.doprint(e)}" for x, e in repl]
+    return body, [pr.doprint(e) for e in red], names
+
+
+def _function(name: str, args: list[str], body: list[str], outs: list[str], ns: dict) -> Callable:
+    src = "\n".join(
+        [f"def {name}({', '.join(args)}):", *(f"    {ln}" for ln in body),
+         f"    return [{', '.join(outs)}]"]
+    )  # fmt: skip
+    namespace = dict(ns)
+    exec(compile(src + "\n", f"<pfaff.fused {name}>", "exec"), namespace)  # our own generated code
+    return namespace[name]
+
+
+class _NumpyMath:
+    """``math.f`` of the printed code as NumPy's ufunc: the same source runs on arrays."""
+
+    RENAMED: ClassVar[dict[str, str]] = {
+        "asin": "arcsin", "acos": "arccos", "atan": "arctan", "atan2": "arctan2",
+        "asinh": "arcsinh", "acosh": "arccosh", "atanh": "arctanh", "fabs": "abs",
+    }  # fmt: skip
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(np, self.RENAMED.get(name, name))
+
+
+def _vectorized(names: list[str], body: list[str], outs: list[str], plain: list, args: list):
+    """``vfn``: the shared source on arrays, checked against ``fn`` at two random states;
+    ``lambdify`` when the printed code does not run on arrays (a Piecewise's ``if``)."""
+    fn = _function("vfn", names, body, outs, {"math": _NumpyMath()})
+    try:
+        rng = np.random.default_rng(3)
+        x = rng.uniform(0.2, 0.9, (len(names), 2))
+        ref = _function("fn", names, body, outs, {"math": math})
+        with np.errstate(all="ignore"):
+            got = np.array([np.broadcast_to(o, (2,)) for o in fn(*x)], dtype=float)
+        want = np.array([ref(*x[:, j]) for j in range(2)], dtype=float).T
+        if np.allclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True):
+            return fn
+    except Exception:
+        pass
+    return sp.lambdify(args, plain, modules="numpy", cse=True, docstring_limit=0)
+
+
+def _rhs_function(
+    body: list[str], outs: list[str], mass: list, acon: list, n: int, m: int, n_params: int
+) -> Callable | None:
+    """``rfn`` (see :class:`FusedKernel`): the shared kernel code, the constraint rows
+    c = −(Ȧq̇ + ḃ) − 2α(A q̇ + b) − β² f, and the floored Schur solve, in one function."""
     nM, nA = len(mass), len(acon)
+    off = nM + nA
     Ms, As = [f"_m{k}" for k in range(nM)], [f"_a{k}" for k in range(nA)]
     Fs, cs = [f"_F{i}" for i in range(n)], [f"_c{i}" for i in range(m)]
     taus = [f"_tau{i}" for i in range(m)]
-    body = [f"{pr.doprint(x)} = {pr.doprint(e)}" for x, e in repl]
-    body += [f"{v} = {pr.doprint(e)}" for v, e in zip(Ms + As + Fs + cs, red, strict=True)]
-    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
-    body += [ln.strip() for ln in lines]
+    lines = [f"{v} = {o}" for v, o in zip(Ms + As + Fs, outs[: off + n], strict=True)]
+    g: list[list[str]] = [[] for _ in range(m)]
+    for k, (i, j) in enumerate(acon):
+        g[i].append(f"{As[k]}*_y{n + j}")
+    for i in range(m):
+        nb, b, f = outs[off + n + i], outs[off + n + m + i], outs[off + n + 2 * m + i]
+        gi = " + ".join(g[i]) or "0.0"
+        lines.append(f"{cs[i]} = ({nb}) - 2*_alpha*({gi} + ({b})) - _beta**2*({f})")
+    schur, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
+    lines += [ln.strip() for ln in schur]
     ys = ", ".join(f"_y{i}" for i in range(2 * n))
+    params = [f"_p{k}" for k in range(n_params)]
     src = "\n".join(
         [
-            f"def make({', '.join([*map(str, P), '_alpha', '_beta', *taus, '_cap'])}, _slow):",
+            f"def make({', '.join([*params, '_alpha', '_beta', *taus, '_cap'])}, _slow):",
             "    def rhs(_t, _y):",
             f"        {ys}, = _y",
             "        try:",
-            *[f"            {ln}" for ln in body],
+            *[f"            {ln}" for ln in body + lines],
             "        except (ValueError, ZeroDivisionError):",
             "            return _slow(_t, _y)",
             f"        return [{', '.join([f'_y{n + i}' for i in range(n)] + out)}]",
@@ -151,5 +190,8 @@ def _rhs_factory(
         ]
     )
     namespace = {**NAMESPACE, "math": math}
-    exec(compile(src + "\n", "<pfaff.fused rhs>", "exec"), namespace)  # our own generated code
+    try:
+        exec(compile(src + "\n", "<pfaff.fused rhs>", "exec"), namespace)  # our own generated code
+    except (SyntaxError, RecursionError):  # something the printer cannot write: the array path
+        return None
     return namespace["make"]
