@@ -89,15 +89,16 @@ def stream_code(
     exprs = [sp.sympify(e) for e in exprs]
     # fold the parameter values in, unless a number then leaves the double range (L² with
     # L = 1e200): such a kernel takes them at run time, where Python's arithmetic raises
-    fold = all(_in_range(sp.sympify(e.xreplace(subs))) for e in exprs)
+    folded = [sp.sympify(e.xreplace(subs)) for e in exprs]
+    fold = all(_in_range(e) for e in folded)
     const: list[float | None] = []
     varying = []
-    for e, flag in zip(exprs, flags, strict=True):
+    for e, ef, flag in zip(exprs, folded, flags, strict=True):
         if e.free_symbols & state or not fold:
             const.append(None)
-            varying.append(e.xreplace(subs) if fold else e)
+            varying.append(ef if fold else e)
         else:
-            c = float(e.xreplace(subs))
+            c = float(ef)
             const.append(c * count if flag else c)
     args = [local_q(a) for a in range(k)] + [local_qd(a) for a in range(k)] + [t]
     angles: list[sp.Expr] = []  # arguments of sin and cos, each reduced once (trig.py)

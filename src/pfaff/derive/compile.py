@@ -23,7 +23,7 @@ from pfaff.derive.blocks import Block
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
 from pfaff.numeric.model import NumericModel
-from pfaff.numeric.streams import Index, StreamKernel
+from pfaff.numeric.streams import Index, StreamCode, StreamKernel
 from pfaff.numeric.structured import ConStreams, DynStreams
 
 if TYPE_CHECKING:
@@ -132,13 +132,29 @@ def block_columns(block: Block) -> list:
 
 
 def _kernel(
-    cols: list, exprs: list, params: Sequence, values: Sequence[float], count: int, summed=None
-):
-    return StreamKernel(cols, stream_code(len(cols), exprs, params, values, count, summed), count)
+    cols: list,
+    exprs: list,
+    params: Sequence,
+    values: Sequence[float],
+    count: int,
+    summed: list[bool] | None = None,
+    lazy: bool = False,
+) -> StreamKernel:
+    """A template's kernel; ``lazy``: its code generated on first use."""
+
+    def make() -> StreamCode:
+        return stream_code(len(cols), exprs, params, values, count, summed)
+
+    return StreamKernel(cols, make if lazy else make(), count)
 
 
-def dyn_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[float]) -> DynStreams:
-    """The stream parts of a dynamics block: M is symmetric, so only entries a <= b are made."""
+def dyn_streams(
+    block: Block, params: Sequence[sp.Symbol], values: Sequence[float], lazy: bool = False
+) -> DynStreams:
+    """The stream parts of a dynamics block: M is symmetric, so only entries a <= b are made.
+
+    ``lazy``: the kernels' code is generated on first use (general models, whose fused kernel
+    may serve every evaluation: half of ``compile()`` on the 14-link pendulum on a cart)."""
     loc = block.local
     upper = sorted(ab for ab in loc.mass if ab[0] <= ab[1])
     forcing = loc.forcing
@@ -147,7 +163,7 @@ def dyn_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[floa
     rows = [cols[a] for a in fidx]
     summed = [False] * len(upper) + [isinstance(ix, Index) and ix.fixed for ix in rows]
     exprs = [loc.mass[ab] for ab in upper] + [forcing[a] for a in fidx]
-    kernel = _kernel(cols, exprs, params, values, block.n_inst, summed)
+    kernel = _kernel(cols, exprs, params, values, block.n_inst, summed, lazy)
 
     def energy_kernel(which: str) -> StreamKernel:
         T, V = energy_exprs(block)
@@ -163,14 +179,16 @@ def dyn_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[floa
     return DynStreams(kernel, upper_streams, rows, energy_kernel, has_power=bool(loc.Q))
 
 
-def con_streams(block: Block, params: Sequence[sp.Symbol], values: Sequence[float]) -> ConStreams:
+def con_streams(
+    block: Block, params: Sequence[sp.Symbol], values: Sequence[float], lazy: bool = False
+) -> ConStreams:
     """The stream parts of a constraint block: ``acc`` for the solve, ``res`` for residuals."""
     cols_local, exprs = constraint_layout(block)
     cols = block_columns(block)
     rows = Index(block.row0, 1, block.n_inst) if block.family else Index.of(block.rows)
     na = len(cols_local)
-    acc = _kernel(cols, [*exprs[:na], exprs[na + 1]], params, values, block.n_inst)
-    res = _kernel(cols, exprs, params, values, block.n_inst)
+    acc = _kernel(cols, [*exprs[:na], exprs[na + 1]], params, values, block.n_inst, lazy=lazy)
+    res = _kernel(cols, exprs, params, values, block.n_inst, lazy=lazy)
     return ConStreams(rows, [cols[a] for a in cols_local], acc, res)
 
 
@@ -190,9 +208,17 @@ def build_model(
     dyn = (
         []
         if constraints_only
-        else [dyn_streams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"]
+        else [
+            dyn_streams(b, params, values, lazy=True)
+            for b in eom.blocks
+            if b.local.kind == "dynamics"
+        ]
     )
-    con = [con_streams(b, params, values) for b in eom.blocks if b.local.kind == "constraint"]
+    con = [
+        con_streams(b, params, values, lazy=True)
+        for b in eom.blocks
+        if b.local.kind == "constraint"
+    ]
     model = NumericModel(
         eom.n,
         eom.m,

@@ -287,8 +287,9 @@ class StreamKernel:
     ----------
     columns : list of Index or ndarray
         Global coordinate indices of each local coordinate over the instances.
-    code : StreamCode
-        The generated functions (:func:`pfaff.derive.codegen.stream_code`). An output flagged
+    code : StreamCode or callable
+        The generated functions (:func:`pfaff.derive.codegen.stream_code`), or a function that
+        makes them, called on first use. An output flagged
         summed is returned as its total over the instances (a float) instead of an array: it is
         reduced chunk by chunk while in cache and never stored (a force on an ordinary
         coordinate, an energy).
@@ -302,8 +303,32 @@ class StreamKernel:
         the constant times ``count``).
     """
 
-    def __init__(self, columns: list, code: StreamCode, count: int) -> None:
+    _LAZY = frozenset(
+        {"varying", "const", "angles", "_fn", "_angle_fn", "_params", "_slot", "_n_stored",
+         "_n_summed", "_partial"}
+    )  # fmt: skip
+
+    def __init__(
+        self, columns: list, code: StreamCode | Callable[[], StreamCode], count: int
+    ) -> None:
         self.columns, self.count = columns, count
+        self._out: np.ndarray | None = None
+        self.chunk = CHUNK  # instances per call of the generated function
+        self._local = threading.local()
+        if isinstance(code, StreamCode):
+            self._bind(code)
+        else:  # generated on first use (a general model served by its fused kernel may never)
+            self._make = code
+
+    def __getattr__(self, name: str) -> object:
+        make = self.__dict__.get("_make")
+        if name not in StreamKernel._LAZY or make is None:
+            raise AttributeError(name)
+        del self._make
+        self._bind(make())
+        return getattr(self, name)
+
+    def _bind(self, code: StreamCode) -> None:
         self.varying = list(code.varying)
         self.const: list[float | None] = list(code.const)
         self.angles = code.angles
@@ -315,10 +340,7 @@ class StreamKernel:
             self._slot.append(-1 - ns if flag else nv)
             ns, nv = ns + flag, nv + (not flag)
         self._n_stored, self._n_summed = nv, ns
-        self._out: np.ndarray | None = None
-        self.chunk = CHUNK  # instances per call of the generated function
-        self._partial = np.zeros((ns, -(-count // CHUNK)))
-        self._local = threading.local()
+        self._partial = np.zeros((ns, -(-self.count // CHUNK)))
 
     def _run(self, t_: float, q: np.ndarray, qd: np.ndarray, start: int, stop: int) -> None:
         out, partial = self._out, self._partial
