@@ -43,7 +43,7 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     if n + m > FUSED_LIMIT:
         return None
     rule, qs, qds = _plain(eom)
-    qrule = dict(zip(eom.coordinates, qs, strict=True))
+    rule.update(zip(eom.coordinates, qs, strict=True))  # one pass: q̈ and q̇ match before q
     M, A = eom.mass_matrix, eom.constraint_matrix
     mass = [(i, j) for i in range(n) for j in range(i, n) if M[i, j] != 0]
     acon = [(i, j) for i in range(m) for j in range(n) if A[i, j] != 0]
@@ -59,15 +59,12 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         + list(eom.constraint_bias)
         + f
     )
-    plain = [sp.sympify(e).xreplace(rule).xreplace(qrule) for e in exprs]
+    plain = [sp.sympify(e).xreplace(rule) for e in exprs]
     args = [t, *qs, *qds, *eom.parameters]
     body, outs, names = _shared_code(plain, args, n)
     fn = _function("fn", names, body, outs, {"math": math})
     vfn = _vectorized(names, body, outs, plain, args)
-    T, V = (
-        sp.sympify(e).xreplace(rule).xreplace(qrule)
-        for e in (eom.kinetic_energy, eom.potential_energy)
-    )
+    T, V = (sp.sympify(e).xreplace(rule) for e in (eom.kinetic_energy, eom.potential_energy))
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
     rfn = _rhs_function(body, outs, mass, acon, n, m, len(args) - 2 * n - 1)
