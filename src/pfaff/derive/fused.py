@@ -30,13 +30,19 @@ if TYPE_CHECKING:
 FUSED_LIMIT = 32  # n + m up to which a fused scalar kernel is generated
 
 
-def _plain(eom: Derivation) -> tuple[dict, list[sp.Symbol], list[sp.Symbol]]:
-    """Replace q(t), q̇(t) (and q̈ by 0) with plain symbols so ``math`` lambdify can take floats."""
-    qs = [sp.Symbol(f"_fq{i}") for i in range(eom.n)]
-    qds = [sp.Symbol(f"_fqd{i}") for i in range(eom.n)]
+def _plain(eom: Derivation) -> tuple[dict, list[sp.Symbol]]:
+    """One replacement, applied in one pass, to the names of the generated code: t -> ``_t``,
+    q(t) -> ``_y{i}``, q̇(t) -> ``_y{n+i}``, q̈ -> 0, parameters -> ``_p{k}``; and the new
+    argument symbols in order (q̈ and q̇ match as whole nodes before the q inside them)."""
+    n = eom.n
+    args = [
+        sp.Symbol("_t"),
+        *(sp.Symbol(f"_y{i}") for i in range(2 * n)),
+        *(sp.Symbol(f"_p{k}") for k in range(len(eom.parameters))),
+    ]
     rule: dict = {accel(c): sp.S.Zero for c in eom.coordinates}
-    rule.update(dict(zip(eom.speeds, qds, strict=True)))
-    return rule, qs, qds
+    rule.update(zip([t, *eom.coordinates, *eom.speeds, *eom.parameters], args, strict=True))
+    return rule, args
 
 
 def build_fused(eom: Derivation) -> FusedKernel | None:
@@ -44,8 +50,8 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     n, m = eom.n, eom.m
     if n + m > FUSED_LIMIT:
         return None
-    rule, qs, qds = _plain(eom)
-    rule.update(zip(eom.coordinates, qs, strict=True))  # one pass: q̈ and q̇ match before q
+    rule, args = _plain(eom)
+    qds = args[n + 1 : 2 * n + 1]
     M, A = eom.mass_matrix, eom.constraint_matrix
     mass = [(i, j) for i in range(n) for j in range(i, n) if M[i, j] != 0]
     acon = [(i, j) for i in range(m) for j in range(n) if A[i, j] != 0]
@@ -62,8 +68,7 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         + f
     )
     plain = [sp.sympify(e).xreplace(rule) for e in exprs]
-    args = [t, *qs, *qds, *eom.parameters]
-    body, outs, names = _shared_code(plain, args, n)
+    body, outs, names = _shared_code(plain, args)
     fn = _function("fn", names, body, outs, MATH)
     vfn = _vectorized(names, body, outs, plain, args)
     T, V = (sp.sympify(e).xreplace(rule) for e in (eom.kinetic_energy, eom.potential_energy))
@@ -96,7 +101,7 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     )
 
 
-def _shared_code(exprs: list, args: list, n: int) -> tuple[list[str], list[str], list[str]]:
+def _shared_code(exprs: list, args: list) -> tuple[list[str], list[str], list[str]]:
     """One common-subexpression pass over all outputs, printed once: the body lines, the output
     expressions and the argument names (``_t, _y0 … _y{2n-1}, _p0 …``) that every fused
     function is built from (a separate ``cse`` + ``lambdify`` per function took half of
@@ -107,18 +112,11 @@ def _shared_code(exprs: list, args: list, n: int) -> tuple[list[str], list[str],
     (``sin``, ``sqrt``), bound to ``math`` or to NumPy by the namespace it runs in
     (:data:`MATH`, :data:`NUMPY`). SymPy prints what SymEngine cannot take.
     """
-    names = [
-        "_t",
-        *(f"_y{i}" for i in range(2 * n)),
-        *(f"_p{k}" for k in range(len(args) - 1 - 2 * n)),
-    ]
-    rule = {a: sp.Symbol(name) for a, name in zip(args, names, strict=True)}
-    exprs = [e.xreplace(rule) for e in exprs]
+    names = [str(a) for a in args]
     try:
         repl, red = symengine.cse([symengine.sympify(e) for e in exprs])
         body = [f"_{x} = {_bare(e)}" for x, e in repl]
-        outs = [_bare(e) for e in red]
-        return body, outs, names
+        return body, [_bare(e) for e in red], names
     except Exception:
         pass
     repl, red = sp.cse(exprs, sp.numbered_symbols("_x"))
