@@ -160,6 +160,25 @@ def _particle_sympy(m: sp.Expr, r: tuple, k: int) -> Local:
 
 
 def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
+    """M and h of a kinetic or potential energy term (Lagrange's equations of L), differentiated
+    in SymEngine when the expression allows (as :func:`_particle`), else in SymPy."""
+    try:
+        engine = _Engine([L])
+    except _Unsupported:
+        engine = None
+    if engine is not None:
+        q, qd = engine.placeholders(k)
+        Ls, T = engine.to(L), symengine.Symbol("t")
+        for a in range(k):
+            p = Ls.diff(qd[a])
+            for b in range(k):
+                e = p.diff(qd[b])
+                if e != 0:
+                    loc.mass[a, b] = _tidy(engine.back(e))
+            e = sum((p.diff(q[b]) * qd[b] for b in range(k)), p.diff(T)) - Ls.diff(q[a])
+            if e != 0:
+                loc.h[a] = _tidy(engine.back(e))
+        return loc
     q, qd = _qs(k)
     for a in range(k):
         p = L.diff(qd[a])
