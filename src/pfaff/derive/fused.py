@@ -73,7 +73,8 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     vfn = _vectorized(names, body, outs, plain, args)
     T, V = (sp.sympify(e).xreplace(rule) for e in (eom.kinetic_energy, eom.potential_energy))
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
-    efn = sp.lambdify(args, [T, V, T0], modules="numpy", cse=True, docstring_limit=0)
+    ebody, eouts, _ = _shared_code([T, V, T0], args)
+    efn = _vectorized(names, ebody, eouts, [T, V, T0], args)
     rfn = _rhs_function(body, outs, mass, acon, n, m, len(args) - 2 * n - 1)
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
