@@ -7,6 +7,7 @@ the bias from them on demand. The user sees it as :class:`pfaff.EquationsOfMotio
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -25,6 +26,44 @@ if TYPE_CHECKING:
 DENSE_SYMBOLIC_LIMIT = 500  # above this many coordinates, M and A are sparse
 SOLVE_LIMIT = 40  # largest n + m for the symbolic solve
 SYMBOLIC_LIMIT = 100_000  # largest n for symbolic matrices (the templates are derived at any n)
+
+
+_TRIG = (sp.sin, sp.cos, sp.tan)
+
+
+def readable_form(e: sp.Expr) -> sp.Expr:
+    """An entry simplified for reading: sin² + cos², angle sums (Fu's rules, then ``trigsimp``).
+
+    Bounded: ``trigsimp`` costs about a second on 60 operations with two angles, so bigger
+    expressions go through Fu's rules first and ``trigsimp`` sees only what they left, when it
+    is small; over 80 operations an entry is shown as derived. Applied per template when a
+    readable property is first read, never on the way to numbers (``compile``).
+
+    Examples
+    --------
+    >>> a, b = sp.symbols("a b")
+    >>> readable_form(sp.sin(a) * sp.sin(b) + sp.cos(a) * sp.cos(b))
+    cos(a - b)
+    """
+    if not e.has(*_TRIG):
+        return e
+    n = sp.count_ops(e)
+    if n > 80:
+        return e
+    s = e if n <= 24 else sp.fu(e)
+    if sp.count_ops(s) <= 24:
+        s = sp.trigsimp(s)
+    return s if sp.count_ops(s) <= n else e
+
+
+@dataclass(frozen=True)
+class NumericParts:
+    """What code is generated from: M's nonzero entries, Q − h, T and V, in the coordinates."""
+
+    mass: dict
+    forcing: list
+    kinetic: sp.Expr
+    potential: sp.Expr
 
 
 def _mapped(seq, fn):
@@ -199,11 +238,26 @@ class Derivation:
                     rule[call] = call.func(*(rule[a] for a in call.args), evaluate=False)
                 yield block, i, idx, rule
 
+    def _local(self, block: Block, attr: str, readable: bool) -> dict:
+        """A template's entries (``mass``, ``h`` or ``Q``): as derived, or simplified for reading
+        (:func:`readable_form`, once per template and cached)."""
+        entries = getattr(block.local, attr)
+        if not readable or attr == "Q":
+            return entries
+        key = (id(block), attr)
+        cache = self._readable_cache
+        if key not in cache:
+            cache[key] = {k: readable_form(e) for k, e in entries.items()}
+        return cache[key]
+
     @cached_property
-    def _mass_entries(self) -> dict[tuple[int, int], sp.Expr]:
+    def _readable_cache(self) -> dict:
+        return {}
+
+    def _assemble_mass(self, readable: bool) -> dict[tuple[int, int], sp.Expr]:
         mass: dict[tuple[int, int], list] = {}
         for block, _, idx, rule in self._instances("dynamics"):
-            for (a, c), e in block.local.mass.items():
+            for (a, c), e in self._local(block, "mass", readable).items():
                 if a <= c:
                     ge = e.xreplace(rule)
                     mass.setdefault((idx[a], idx[c]), []).append(ge)
@@ -211,10 +265,19 @@ class Derivation:
                         mass.setdefault((idx[c], idx[a]), []).append(ge)
         return {k: s for k, v in mass.items() if (s := sp.Add(*v)) != 0}
 
-    def _vector_terms(self, attr: str) -> list[sp.Expr]:
+    @cached_property
+    def _mass_entries(self) -> dict[tuple[int, int], sp.Expr]:
+        """M's nonzero entries as derived (no simplification): what code is generated from."""
+        return self._assemble_mass(readable=False)
+
+    @cached_property
+    def _readable_mass_entries(self) -> dict[tuple[int, int], sp.Expr]:
+        return self._assemble_mass(readable=True)
+
+    def _vector_terms(self, attr: str, readable: bool = False) -> list[sp.Expr]:
         out: list[list] = [[] for _ in range(self.n)]
         for block, _, idx, rule in self._instances("dynamics"):
-            for a, e in getattr(block.local, attr).items():
+            for a, e in self._local(block, attr, readable).items():
                 out[idx[a]].append(e.xreplace(rule))
         return [sp.Add(*v) for v in out]
 
@@ -244,6 +307,21 @@ class Derivation:
         return self._vector_terms("h")
 
     @cached_property
+    def _readable_h_list(self) -> list[sp.Expr]:
+        return self._vector_terms("h", readable=True)
+
+    @cached_property
+    def numeric_parts(self) -> NumericParts:
+        """M (its nonzero entries), Q − h, T and V as derived, without the simplification the
+        readable properties get: what the compile stage generates code from."""
+        return NumericParts(
+            self._mass_entries,
+            [q - h for q, h in zip(self._Q_list, self._h_list, strict=True)],
+            self.kinetic_energy,
+            self.potential_energy,
+        )
+
+    @cached_property
     def _Q_list(self) -> list[sp.Expr]:
         return self._vector_terms("Q")
 
@@ -259,13 +337,13 @@ class Derivation:
 
     @cached_property
     def mass_matrix(self) -> sp.MatrixBase:
-        """M, shape (n, n)."""
-        return self._matrix(self.n, self.n, self._mass_entries)
+        """M, shape (n, n), its entries simplified for reading (per template, on first access)."""
+        return self._matrix(self.n, self.n, self._readable_mass_entries)
 
     @cached_property
     def velocity_terms(self) -> sp.MatrixBase:
         """h, shape (n, 1): velocity products, explicit time dependence and ∂V/∂q."""
-        return sp.ImmutableMatrix(self._h_list)
+        return sp.ImmutableMatrix(self._readable_h_list)
 
     @cached_property
     def generalized_forces(self) -> sp.MatrixBase:
@@ -275,7 +353,9 @@ class Derivation:
     @cached_property
     def forcing(self) -> sp.MatrixBase:
         """Q - h, shape (n, 1)."""
-        return sp.ImmutableMatrix([q - h for q, h in zip(self._Q_list, self._h_list, strict=True)])
+        return sp.ImmutableMatrix(
+            [q - h for q, h in zip(self._Q_list, self._readable_h_list, strict=True)]
+        )
 
     @cached_property
     def constraint_matrix(self) -> sp.MatrixBase:
@@ -322,12 +402,12 @@ class Derivation:
         """
         lhs: list[list] = [[] for _ in range(self.n)]
         rhs: list[list] = [[q] for q in self._Q_list]
-        for (i, j), e in self._mass_entries.items():
+        for (i, j), e in self._readable_mass_entries.items():
             lhs[i].append(e * self.accels[j])
         for (i, j), e in self._constraint_entries["A"].items():
             rhs[j].append(e * self.multipliers[i])
         return EquationList(
-            sp.Eq(sp.Add(*lhs[j], self._h_list[j]), sp.Add(*rhs[j]), evaluate=False)
+            sp.Eq(sp.Add(*lhs[j], self._readable_h_list[j]), sp.Add(*rhs[j]), evaluate=False)
             for j in range(self.n)
         )
 

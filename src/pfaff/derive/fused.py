@@ -52,17 +52,18 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         return None
     rule, args = _plain(eom)
     qds = args[n + 1 : 2 * n + 1]
-    M, A = eom.mass_matrix, eom.constraint_matrix
-    mass = [(i, j) for i in range(n) for j in range(i, n) if M[i, j] != 0]
+    parts = eom.numeric_parts  # as derived: no simplification for reading
+    Me, A = parts.mass, eom.constraint_matrix
+    mass = sorted((i, j) for i, j in Me if i <= j)
     acon = [(i, j) for i in range(m) for j in range(n) if A[i, j] != 0]
     bias = [
         e.xreplace({accel(c): 0 for c in eom.coordinates}) for e in eom.acceleration_constraints
     ]
     f = [sp.S.Zero if e is None else e for e in eom.holonomic_constraints]
     exprs = (
-        [M[i, j] for i, j in mass]
+        [Me[i, j] for i, j in mass]
         + [A[i, j] for i, j in acon]
-        + list(eom.forcing)
+        + list(parts.forcing)
         + [-e for e in bias]
         + list(eom.constraint_bias)
         + f
@@ -71,7 +72,7 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     body, outs, names = _shared_code(plain, args)
     fn = _function("fn", names, body, outs, MATH)
     vfn = _vectorized(names, body, outs, plain, args)
-    T, V = (sp.sympify(e).xreplace(rule) for e in (eom.kinetic_energy, eom.potential_energy))
+    T, V = (sp.sympify(e).xreplace(rule) for e in (parts.kinetic, parts.potential))
     T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
     ebody, eouts, _ = _shared_code([T, V, T0], args)
     efn = _vectorized(names, ebody, eouts, [T, V, T0], args)
