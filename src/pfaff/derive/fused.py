@@ -51,31 +51,15 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     if n + m > FUSED_LIMIT:
         return None
     rule, args = _plain(eom)
-    qds = args[n + 1 : 2 * n + 1]
-    parts = eom.numeric_parts  # as derived: no simplification for reading
-    Me, A = parts.mass, eom.constraint_matrix
-    mass = sorted((i, j) for i, j in Me if i <= j)
-    acon = [(i, j) for i in range(m) for j in range(n) if A[i, j] != 0]
-    bias = [
-        e.xreplace({accel(c): 0 for c in eom.coordinates}) for e in eom.acceleration_constraints
-    ]
-    f = [sp.S.Zero if e is None else e for e in eom.holonomic_constraints]
-    exprs = (
-        [Me[i, j] for i, j in mass]
-        + [A[i, j] for i, j in acon]
-        + list(parts.forcing)
-        + [-e for e in bias]
-        + list(eom.constraint_bias)
-        + f
-    )
-    plain = [sp.sympify(e).xreplace(rule) for e in exprs]
-    body, outs, names = _shared_code(plain, args)
+    parts = _engine_parts(eom, args)
+    if parts is None:  # SymPy's assembly, renamed (a function SymEngine does not share)
+        parts = _sympy_parts(eom, rule)
+    mass, acon, exprs, energies = parts
+    body, outs, names = _shared_code(exprs, args)
     fn = _function("fn", names, body, outs, MATH)
-    vfn = _vectorized(names, body, outs, plain, args)
-    T, V = (sp.sympify(e).xreplace(rule) for e in (parts.kinetic, parts.potential))
-    T0 = T.xreplace(dict.fromkeys(qds, sp.S.Zero))
-    ebody, eouts, _ = _shared_code([T, V, T0], args)
-    efn = _vectorized(names, ebody, eouts, [T, V, T0], args)
+    vfn = _vectorized(names, body, outs, exprs, args)
+    ebody, eouts, _ = _shared_code(energies, args)
+    efn = _vectorized(names, ebody, eouts, energies, args)
     rfn = _rhs_function(body, outs, mass, acon, n, m, len(args) - 2 * n - 1)
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
@@ -103,6 +87,105 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
     )
 
 
+def _sympy_parts(eom: Derivation, rule: dict) -> tuple:
+    """(mass pattern, A pattern, outputs, [T, V, T(q, 0, t)]) from the Derivation's SymPy
+    assembly (:attr:`Derivation.numeric_parts`), renamed to the generated code's names."""
+    n, m = eom.n, eom.m
+    parts = eom.numeric_parts  # as derived: no simplification for reading
+    Me, A = parts.mass, eom.constraint_matrix
+    mass = sorted((i, j) for i, j in Me if i <= j)
+    acon = [(i, j) for i in range(m) for j in range(n) if A[i, j] != 0]
+    bias = [
+        e.xreplace({accel(c): 0 for c in eom.coordinates}) for e in eom.acceleration_constraints
+    ]
+    f = [sp.S.Zero if e is None else e for e in eom.holonomic_constraints]
+    exprs = (
+        [Me[i, j] for i, j in mass]
+        + [A[i, j] for i, j in acon]
+        + list(parts.forcing)
+        + [-e for e in bias]
+        + list(eom.constraint_bias)
+        + f
+    )
+    plain = [sp.sympify(e).xreplace(rule) for e in exprs]
+    T, V = (sp.sympify(e).xreplace(rule) for e in (parts.kinetic, parts.potential))
+    T0 = T.xreplace({rule[s]: sp.S.Zero for s in eom.speeds})
+    return mass, acon, plain, [T, V, T0]
+
+
+def _engine_parts(eom: Derivation, args: list) -> tuple | None:
+    """The same outputs assembled in SymEngine from the templates' local forms: each template
+    converted once, each instance a substitution of names (on the 20-link chain about half of
+    ``compile()`` was SymPy's assembly and renaming). None when a template has a function
+    SymEngine does not share with SymPy."""
+    n, m = eom.n, eom.m
+    se = symengine
+    y = [se.Symbol(str(a)) for a in args]  # _t, _y…, _p…
+    base = {se.Symbol("t"): y[0]}
+    base.update({se.Symbol(str(p)): y[1 + 2 * n + k] for k, p in enumerate(eom.parameters)})
+    M: dict = {}
+    A: dict = {}
+    F = [se.Integer(0)] * n
+    b, nbias, f = ([se.Integer(0)] * m for _ in range(3))
+    T = V = se.Integer(0)
+    try:
+        for block in eom.blocks:
+            loc = block.local
+            exprs = [*loc.mass.values(), *loc.h.values(), *loc.Q.values(), *loc.A.values()]
+            exprs += [loc.b, loc.bias, loc.kinetic, loc.potential]
+            exprs += [] if loc.f is None else [loc.f]
+            for e in exprs:
+                ok = all(isinstance(c, _SHARED) for c in sp.sympify(e).atoms(sp.Function))
+                if not ok or sp.sympify(e).has(sp.Piecewise, sp.Derivative):
+                    return None
+            conv = _Converted(loc)
+            for i, idx in enumerate(block.coords.tolist()):
+                sub = dict(base)
+                sub.update({se.Symbol(f"_q{a}"): y[1 + c] for a, c in enumerate(idx)})
+                sub.update({se.Symbol(f"_qd{a}"): y[1 + n + c] for a, c in enumerate(idx)})
+                if loc.kind == "dynamics":
+                    for (a, c), e in conv.mass.items():
+                        if a <= c:
+                            key = (idx[a], idx[c]) if idx[a] <= idx[c] else (idx[c], idx[a])
+                            M[key] = M.get(key, 0) + e.subs(sub)
+                    for a, e in conv.Q.items():
+                        F[idx[a]] += e.subs(sub)
+                    for a, e in conv.h.items():
+                        F[idx[a]] -= e.subs(sub)
+                    T += conv.kinetic.subs(sub)
+                    V += conv.potential.subs(sub)
+                else:
+                    r = int(block.rows[i])
+                    for a, e in conv.A.items():
+                        A[r, idx[a]] = e.subs(sub)
+                    b[r], nbias[r] = conv.b.subs(sub), -conv.bias.subs(sub)
+                    f[r] = se.Integer(0) if conv.f is None else conv.f.subs(sub)
+    except Exception:
+        return None
+    mass = sorted(key for key, e in M.items() if e != 0)
+    acon = sorted(key for key, e in A.items() if e != 0)
+    exprs = [M[key] for key in mass] + [A[key] for key in acon] + F + nbias + b + f
+    T0 = T.subs({y[1 + n + j]: se.Integer(0) for j in range(n)})
+    return mass, acon, exprs, [T, V, T0]
+
+
+_SHARED = (sp.sin, sp.cos, sp.tan, sp.exp, sp.log, sp.sinh, sp.cosh, sp.tanh)
+
+
+class _Converted:
+    """A template's local forms in SymEngine, converted once."""
+
+    def __init__(self, loc: object) -> None:
+        c = symengine.sympify
+        self.mass = {key: c(e) for key, e in loc.mass.items()}
+        self.h = {a: c(e) for a, e in loc.h.items()}
+        self.Q = {a: c(e) for a, e in loc.Q.items()}
+        self.A = {a: c(e) for a, e in loc.A.items()}
+        self.b, self.bias = c(loc.b), c(loc.bias)
+        self.kinetic, self.potential = c(loc.kinetic), c(loc.potential)
+        self.f = None if loc.f is None else c(loc.f)
+
+
 def _shared_code(exprs: list, args: list) -> tuple[list[str], list[str], list[str]]:
     """One common-subexpression pass over all outputs, printed once: the body lines, the output
     expressions and the argument names (``_t, _y0 … _y{2n-1}, _p0 …``) that every fused
@@ -116,12 +199,12 @@ def _shared_code(exprs: list, args: list) -> tuple[list[str], list[str], list[st
     """
     names = [str(a) for a in args]
     try:
-        repl, red = symengine.cse([symengine.sympify(e) for e in exprs])
+        repl, red = symengine.cse([symengine.sympify(e) for e in exprs])  # (no-op if converted)
         body = [f"_{x} = {_bare(e)}" for x, e in repl]
         return body, [_bare(e) for e in red], names
     except Exception:
         pass
-    repl, red = sp.cse(exprs, sp.numbered_symbols("_x"))
+    repl, red = sp.cse([sp.sympify(e) for e in exprs], sp.numbered_symbols("_x"))
     pr = PythonCodePrinter({"standard": "python3"})
     body = [f"{pr.doprint(x)} = {pr.doprint(e)}" for x, e in repl]
     return body, [pr.doprint(e) for e in red], names
@@ -184,7 +267,8 @@ def _vectorized(names: list[str], body: list[str], outs: list[str], plain: list,
             return fn
     except Exception:
         pass
-    return sp.lambdify(args, plain, modules="numpy", cse=True, docstring_limit=0)
+    exprs = [sp.sympify(e) for e in plain]  # SymEngine's outputs back to SymPy for lambdify
+    return sp.lambdify(args, exprs, modules="numpy", cse=True, docstring_limit=0)
 
 
 def _rhs_function(
