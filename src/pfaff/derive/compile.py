@@ -11,6 +11,7 @@ both model kinds (:mod:`pfaff.derive.compile_family` for families).
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,7 @@ from pfaff.core.symbols import local_qd
 from pfaff.derive.blocks import Block
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
+from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.model import NumericModel
 from pfaff.numeric.streams import Index, StreamCode, StreamKernel
 from pfaff.numeric.structured import ConStreams, DynStreams
@@ -232,13 +234,26 @@ def build_model(
         solver=solver,
     )
     if not constraints_only and model.solver == "range-space":
-        try:
-            fused = build_fused(eom)
-        except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
-            fused = None
+        fused = fused_kernel(eom)
         if fused is not None:
             model.use_fused(fused)
     return model
+
+
+_FUSED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def fused_kernel(eom: Derivation) -> FusedKernel | None:
+    """The fused kernel of ``eom``, generated once per derivation: it takes the parameter values
+    at run time, so compiling again with other values (a sweep) reuses it."""
+    if eom in _FUSED:
+        return _FUSED[eom]
+    try:
+        fused = build_fused(eom)
+    except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
+        fused = None
+    _FUSED[eom] = fused
+    return fused
 
 
 def compile_equations(
