@@ -20,7 +20,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from pfaff.core.symbols import accel, t
 from pfaff.numeric.fused import FusedKernel
-from pfaff.numeric.smallsolve import NAMESPACE, schur_solver, schur_source
+from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -84,6 +84,7 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         (off, off + n, off + n + m, off + n + 2 * m),
         tuple(i for i, _ in acon),
         tuple(j for _, j in acon),
+        _llvm_factory(mass, acon, exprs, n, m, args),
     )
 
 
@@ -269,6 +270,60 @@ def _vectorized(names: list[str], body: list[str], outs: list[str], plain: list,
         pass
     exprs = [sp.sympify(e) for e in plain]  # SymEngine's outputs back to SymPy for lambdify
     return sp.lambdify(args, exprs, modules="numpy", cse=True, docstring_limit=0)
+
+
+def _llvm_factory(
+    mass: list, acon: list, exprs: list, n: int, m: int, args: list
+) -> Callable[[], Callable | None]:
+    """``llvm`` of :class:`FusedKernel`: the right-hand side [q̇, q̈] as SymEngine expressions
+    (the kernel's outputs, the constraint rows, and the floored Schur solve run on them by
+    :func:`pfaff.numeric.smallsolve.schur_expressions`: the algorithm and floor of ``rfn``),
+    compiled by SymEngine's LLVM backend on first use."""
+    done: list = []
+
+    def make() -> Callable | None:
+        if done:
+            return done[0]
+        done.append(None)
+        try:
+            done[0] = _llvm_rhs(mass, acon, exprs, n, m, args)
+        except Exception:
+            done[0] = None
+        return done[0]
+
+    return make
+
+
+def _llvm_rhs(mass: list, acon: list, exprs: list, n: int, m: int, args: list) -> Callable:
+    se = symengine
+    ex = [se.sympify(e) for e in exprs]
+    syms = [se.Symbol(str(a)) for a in args]  # _t, _y…, _p…
+    y = syms[1 : 2 * n + 1]
+    alpha, beta, cap = se.Symbol("_alpha"), se.Symbol("_beta"), se.Symbol("_cap")
+    taus = [se.Symbol(f"_tau{j}") for j in range(m)]
+    nM, nA = len(mass), len(acon)
+    off = nM + nA
+    g = [se.Integer(0)] * m
+    for s, (i, j) in enumerate(acon):
+        g[i] += ex[nM + s] * y[n + j]
+    values = {f"m{s}": ex[s] for s in range(nM)}
+    values |= {f"a{s}": ex[nM + s] for s in range(nA)}
+    values |= {f"F{i}": ex[off + i] for i in range(n)}
+    for i in range(m):
+        nb, b, f = ex[off + n + i], ex[off + n + m + i], ex[off + n + 2 * m + i]
+        values[f"c{i}"] = nb - 2 * alpha * (g[i] + b) - beta**2 * f
+    values |= {f"tau{j}": taus[j] for j in range(m)} | {"cap": cap}
+    namespace = {
+        "sqrt": se.sqrt,
+        "max": lambda *a: se.Max(*a),
+        "pick": lambda d, tau: se.Piecewise(
+            (d, d >= tau), (tau / 2 + se.Max(d, 0) ** 2 / (2 * tau), True)
+        ),
+        "capped": lambda tj, top: se.Min(tj, top),
+    }
+    qdd = schur_expressions(mass, acon, values, n, m, namespace)
+    inputs = [*syms, alpha, beta, *taus, cap]
+    return se.Lambdify(inputs, [*y[n:], *qdd], backend="llvm", cse=True)
 
 
 def _rhs_function(

@@ -37,10 +37,11 @@ def _dot(pairs: list[tuple[Entry, Entry]]) -> str | None:
 
 
 class _Writer:
-    def __init__(self, prefix: str = "v") -> None:
+    def __init__(self, prefix: str = "v", symbolic: bool = False) -> None:
         self.lines: list[str] = []
         self.count = 0
         self.prefix = prefix
+        self.symbolic = symbolic  # no Python conditionals: the code runs on symbols too
 
     def let(self, expr: str | None) -> Entry:
         if expr is None:
@@ -59,7 +60,9 @@ class _Writer:
             diag = S[j][j] or "0.0"
             if acc is not None:
                 diag = f"{diag} - ({acc})"
-            if tau:  # the common case d >= τ costs one comparison, no call
+            if tau and self.symbolic:  # one expression: Piecewise in the namespace's pick
+                diag = f"pick({self.let(diag)}, {tau[j]})"
+            elif tau:  # the common case d >= τ costs one comparison, no call
                 d = self.let(diag)
                 diag = f"{d} if {d} >= {tau[j]} else floored({d}, {tau[j]})"
             L[j][j] = self.let(f"sqrt({diag})")
@@ -148,12 +151,15 @@ def schur_source(
     tau: list[str] | None = None,
     cap: str | None = None,
     prefix: str = "v",
+    symbolic: bool = False,
 ) -> tuple[list[str], list[str]]:
     """Lines (indented for a function body) computing q̈, and the n expressions of q̈.
 
     The inputs are variable names: M's entries ``Ms`` (pattern ``mass``), A's ``As`` (pattern
     ``acon``), the forcing ``Fs`` and the constraint right-hand side ``cs``; intermediate variables
     are ``{prefix}1, {prefix}2, …``. ``shift``, ``tau`` and ``cap`` as in :func:`schur_solver`.
+    ``symbolic``: no Python conditionals (the floor and the cap call ``pick`` and ``capped``), so
+    that the lines also run on symbolic values (:func:`schur_expressions`).
 
     Examples
     --------
@@ -166,7 +172,7 @@ def schur_source(
     3.0
     """
     n, m = len(Fs), len(cs)
-    w = _Writer(prefix)
+    w = _Writer(prefix, symbolic)
     M: list[list[Entry]] = [[None] * n for _ in range(n)]
     for name, (i, j) in zip(Ms, mass, strict=True):
         M[i][j] = M[j][i] = name
@@ -190,7 +196,8 @@ def schur_source(
         r.append(w.let(f"{cs[i]} - ({acc})" if acc else cs[i]))
     if tau and cap and m:  # τ_j never above cap · max diag S: rows shrinking together stay exact
         top = w.let(f"{cap} * max({', '.join(S[i][i] or '0.0' for i in range(m))}, 0.0)")
-        tau = [w.let(f"{tj} if {tj} < {top} else {top}") or tj for tj in tau]
+        cap_of = "capped({0}, {1})" if symbolic else "{0} if {0} < {1} else {1}"
+        tau = [w.let(cap_of.format(tj, top)) or tj for tj in tau]
     lam = w.solve(w.cholesky(S, tau), r) if m else []
     out = []
     for i in range(n):
@@ -198,3 +205,29 @@ def schur_source(
         terms = [x for x in (y[i], acc) if x is not None]
         out.append(" + ".join(terms) if terms else "0.0")
     return w.lines, out
+
+
+def schur_expressions(
+    mass: list[tuple[int, int]],
+    acon: list[tuple[int, int]],
+    values: dict[str, object],
+    n: int,
+    m: int,
+    namespace: dict,
+) -> list:
+    """q̈ of the floored range-space solve as expressions: :func:`schur_source`'s lines (the same
+    algorithm and floor) run on symbolic ``values`` for the names ``m{s}``, ``a{s}``, ``F{i}``,
+    ``c{i}``, ``tau{j}`` and ``cap``; ``namespace`` gives ``sqrt``, ``max``, ``pick(d, tau)`` (the
+    floored pivot) and ``capped(tau, top)`` for that algebra.
+    """
+    Ms = [f"m{s}" for s in range(len(mass))]
+    As = [f"a{s}" for s in range(len(acon))]
+    Fs, cs = [f"F{i}" for i in range(n)], [f"c{i}" for i in range(m)]
+    taus = [f"tau{j}" for j in range(m)]
+    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="cap", symbolic=True)
+    names = [*Ms, *As, *Fs, *cs, *taus, "cap"]
+    src = f"def schur({', '.join(names)}):\n" + "\n".join(lines)
+    src += f"\n    return [{', '.join(out)}]\n"
+    env = dict(namespace)
+    exec(compile(src, "<pfaff.smallsolve symbolic>", "exec"), env)  # our own generated code
+    return env["schur"](*(values[k] for k in names))
