@@ -66,9 +66,9 @@ def test_lagrangian_same_as_sympy(monkeypatch) -> None:
     fast = templates._lagrangian(L, k, Local("dynamics", k))
 
     def refuse(exprs):
-        raise templates._Unsupported
+        raise templates.Unsupported
 
-    monkeypatch.setattr(templates, "_Engine", refuse)
+    monkeypatch.setattr(templates, "Engine", refuse)
     slow = templates._lagrangian(L, k, Local("dynamics", k))
     assert set(fast.mass) == set(slow.mass) and set(fast.h) == set(slow.h)
     for key, e in fast.mass.items():
@@ -76,3 +76,44 @@ def test_lagrangian_same_as_sympy(monkeypatch) -> None:
     for a, e in fast.h.items():
         assert sp.simplify(e - slow.h[a]) == 0
     assert fast.mass[0, 1].free_symbols >= {b_}  # the positive symbol, not a plain copy
+
+
+def test_symbols_sympy_keeps_apart_stay_apart() -> None:
+    """Two symbols named m (one positive) and a parameter named t that is not time: SymEngine
+    would merge them, so these templates take the SymPy path; the numbers are SymPy's."""
+    import pfaff
+
+    m1, m2 = sp.Symbol("m", positive=True), sp.Symbol("m")
+    (x,) = pfaff.coordinates("x:1")
+    s = pfaff.System([x])
+    s.add_particle(m1 + 2 * m2, [x, 0])
+    s.add_generalized_force(x, m1)
+    qdd = s.equations().compile({m1: 1.0, m2: 10.0}).accelerations(0, [0.1], [0.0])[0]
+    assert qdd[0] == pytest.approx(1 / 21, rel=1e-12)  # F/M = 1/(1 + 2·10)
+
+    tp = sp.Symbol("t", positive=True)
+    m, w = sp.symbols("m w", positive=True)
+    s = pfaff.System([x])
+    s.add_particle(m, [x + sp.sin(w * pfaff.t), 0])
+    s.add_potential_energy(tp * x**2 / 2)
+    eom = s.equations()
+    values = {"m": 1.0, "w": 2.0, "t": 3.0}
+    expect = -3.0 * 0.1 + 4.0 * np.sin(0.8)  # ẍ = -k x/m + w² sin(w t), k = 3
+    for solver in ("range-space", "lu"):
+        qdd = eom.compile(values, solver=solver).accelerations(0.4, [0.1], [0.0])[0]
+        assert qdd[0] == pytest.approx(expect, rel=1e-12)
+
+
+def test_functions_symengine_cannot_differentiate_take_sympy() -> None:
+    """Max is no SymPy Function atom but SymEngine cannot differentiate it: the SymPy path."""
+    import pfaff
+
+    m, L = sp.symbols("m L", positive=True)
+    (x,) = pfaff.coordinates("x:1")
+    s = pfaff.System([x])
+    s.add_particle(m, [sp.Max(L, 1) * x, 0])
+    s.add_generalized_force(x, 1)
+    eom = s.equations()
+    assert not eom.velocity_terms[0].has(sp.Derivative)
+    qdd = eom.compile({"m": 1.0, "L": 2.0}).accelerations(0, [0.1], [0.0])[0]
+    assert qdd[0] == pytest.approx(0.25, rel=1e-12)  # 1 / (m Max(L, 1)²)

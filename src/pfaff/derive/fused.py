@@ -19,6 +19,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from pfaff.core.symbols import accel, t
+from pfaff.derive.engine import engine_safe
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
 
@@ -129,16 +130,16 @@ def _engine_parts(eom: Derivation, args: list) -> tuple | None:
     F = [se.Integer(0)] * n
     b, nbias, f = ([se.Integer(0)] * m for _ in range(3))
     T = V = se.Integer(0)
+    if len({p.name for p in eom.parameters} | {"t"}) != len(eom.parameters) + 1:
+        return None  # two parameters of one name, or one named t: SymEngine would merge them
     try:
         for block in eom.blocks:
             loc = block.local
             exprs = [*loc.mass.values(), *loc.h.values(), *loc.Q.values(), *loc.A.values()]
             exprs += [loc.b, loc.bias, loc.kinetic, loc.potential]
             exprs += [] if loc.f is None else [loc.f]
-            for e in exprs:
-                ok = all(isinstance(c, _SHARED) for c in sp.sympify(e).atoms(sp.Function))
-                if not ok or sp.sympify(e).has(sp.Piecewise, sp.Derivative):
-                    return None
+            if not engine_safe(exprs):
+                return None
             conv = _Converted(loc)
             for i, idx in enumerate(block.coords.tolist()):
                 sub = dict(base)
@@ -168,9 +169,6 @@ def _engine_parts(eom: Derivation, args: list) -> tuple | None:
     exprs = [M[key] for key in mass] + [A[key] for key in acon] + F + nbias + b + f
     T0 = T.subs({y[1 + n + j]: se.Integer(0) for j in range(n)})
     return mass, acon, exprs, [T, V, T0]
-
-
-_SHARED = (sp.sin, sp.cos, sp.tan, sp.exp, sp.log, sp.sinh, sp.cosh, sp.tanh)
 
 
 class _Converted:

@@ -21,6 +21,7 @@ import sympy as sp
 from pfaff.core.errors import ModelError
 from pfaff.core.symbols import local_q, local_qd, t
 from pfaff.derive.blocks import Block, Local
+from pfaff.derive.engine import Engine, Unsupported
 from pfaff.derive.equations import Derivation
 from pfaff.derive.memory import check_memory
 from pfaff.derive.rank import check_constraint_rank
@@ -80,8 +81,8 @@ def _particle(key: tuple, k: int) -> Local:
     """
     m, r = key[2], key[3:]
     try:
-        engine = _Engine([m, *r])
-    except _Unsupported:
+        engine = Engine([m, *r])
+    except Unsupported:
         return _particle_sympy(m, r, k)
     q, qd = engine.placeholders(k)
     M, R, T = engine.to(m), [engine.to(rc) for rc in r], symengine.Symbol("t")
@@ -98,46 +99,6 @@ def _particle(key: tuple, k: int) -> Local:
         if e != 0:
             loc.h[a] = _tidy(engine.back(e))
     return loc
-
-
-class _Unsupported(Exception):
-    """An expression the SymEngine path does not take."""
-
-
-_SHARED_FUNCTIONS = (sp.sin, sp.cos, sp.tan, sp.exp, sp.log, sp.sinh, sp.cosh, sp.tanh)
-
-
-class _Engine:
-    """The round trip of one template through SymEngine: in, and back to SymPy with the
-    original symbols (their assumptions, which SymEngine does not carry, restored)."""
-
-    def __init__(self, exprs: list) -> None:
-        exprs = [sp.sympify(e) for e in exprs]
-        for e in exprs:
-            if any(not isinstance(f, _SHARED_FUNCTIONS) for f in e.atoms(sp.Function)):
-                raise _Unsupported
-            if e.has(sp.Piecewise, sp.Derivative, sp.Integral, sp.Order):
-                raise _Unsupported
-        syms = set().union(*(e.free_symbols for e in exprs))
-        if any(type(s) is not sp.Symbol for s in syms):
-            raise _Unsupported
-        self.restore = {sp.Symbol(s.name): s for s in syms if sp.Symbol(s.name) != s}
-
-    @staticmethod
-    def placeholders(k: int) -> tuple[list, list]:
-        q = [symengine.Symbol(local_q(a).name) for a in range(k)]
-        return q, [symengine.Symbol(local_qd(a).name) for a in range(k)]
-
-    @staticmethod
-    def to(e: object) -> symengine.Basic:
-        try:
-            return symengine.sympify(e)
-        except Exception as err:
-            raise _Unsupported from err
-
-    def back(self, e: symengine.Basic) -> sp.Expr:
-        x = sp.sympify(e)
-        return x.xreplace(self.restore) if self.restore else x
 
 
 def _particle_sympy(m: sp.Expr, r: tuple, k: int) -> Local:
@@ -163,8 +124,8 @@ def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
     """M and h of a kinetic or potential energy term (Lagrange's equations of L), differentiated
     in SymEngine when the expression allows (as :func:`_particle`), else in SymPy."""
     try:
-        engine = _Engine([L])
-    except _Unsupported:
+        engine = Engine([L])
+    except Unsupported:
         engine = None
     if engine is not None:
         q, qd = engine.placeholders(k)
