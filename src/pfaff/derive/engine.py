@@ -38,9 +38,33 @@ def engine_safe(exprs: list) -> bool:
     return True
 
 
+class Plain:
+    """A template derived in SymPy itself: the interface of :class:`Engine`, with no round trip."""
+
+    t = t
+
+    @staticmethod
+    def placeholders(k: int) -> tuple[list, list]:
+        return [local_q(a) for a in range(k)], [local_qd(a) for a in range(k)]
+
+    @staticmethod
+    def to(e: object) -> sp.Expr:
+        return sp.sympify(e)
+
+    @staticmethod
+    def back(e: sp.Expr) -> sp.Expr:
+        return e
+
+    @staticmethod
+    def add(terms: object) -> sp.Expr:
+        return sp.Add(*terms)
+
+
 class Engine:
     """The round trip of one template through SymEngine: in, and back to SymPy with the
     original symbols (their assumptions, which SymEngine does not carry, restored)."""
+
+    t = symengine.Symbol("t")
 
     def __init__(self, exprs: list) -> None:
         exprs = [sp.sympify(e) for e in exprs]
@@ -64,3 +88,15 @@ class Engine:
     def back(self, e: symengine.Basic) -> sp.Expr:
         x = sp.sympify(e)
         return x.xreplace(self.restore) if self.restore else x
+
+    @staticmethod
+    def add(terms: object) -> symengine.Basic:
+        return symengine.Add(*terms)
+
+
+def algebra(exprs: list) -> Engine | Plain:
+    """SymEngine for a template whose expressions allow the exact round trip, else SymPy."""
+    try:
+        return Engine(exprs)
+    except Unsupported:
+        return Plain()

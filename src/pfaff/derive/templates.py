@@ -15,13 +15,12 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-import symengine
 import sympy as sp
 
 from pfaff.core.errors import ModelError
 from pfaff.core.symbols import local_q, local_qd, t
 from pfaff.derive.blocks import Block, Local
-from pfaff.derive.engine import Engine, Unsupported
+from pfaff.derive.engine import Engine, Plain, algebra
 from pfaff.derive.equations import Derivation
 from pfaff.derive.memory import check_memory
 from pfaff.derive.rank import check_constraint_rank
@@ -77,44 +76,29 @@ def _particle(key: tuple, k: int) -> Local:
     SymEngine takes 4 ms where SymPy takes 210 ms for the 20th bob of the 20-link pendulum on a
     cart (21 coordinates); the results come back to SymPy (60 ms), which the rest of the
     derivation reads. Expressions with functions SymEngine does not share with SymPy, or
-    symbols it cannot carry, are derived in SymPy.
+    symbols it cannot carry, are derived in SymPy (:func:`pfaff.derive.engine.algebra`).
     """
     m, r = key[2], key[3:]
-    try:
-        engine = Engine([m, *r])
-    except Unsupported:
-        return _particle_sympy(m, r, k)
-    q, qd = engine.placeholders(k)
-    M, R, T = engine.to(m), [engine.to(rc) for rc in r], symengine.Symbol("t")
+    return _particle_in(algebra([m, *r]), m, r, k)
+
+
+def _particle_in(alg: Engine | Plain, m: sp.Expr, r: tuple, k: int) -> Local:
+    """:func:`_particle` in the algebra ``alg`` (SymEngine or SymPy), results in SymPy."""
+    q, qd = alg.placeholders(k)
+    M, R, T = alg.to(m), [alg.to(rc) for rc in r], alg.t
     J = [[rc.diff(q[a]) for a in range(k)] for rc in R]
-    v = [sum((Jc[a] * qd[a] for a in range(k)), rc.diff(T)) for Jc, rc in zip(J, R, strict=True)]
-    acc = [sum((vc.diff(q[a]) * qd[a] for a in range(k)), vc.diff(T)) for vc in v]
-    loc = Local("dynamics", k, kinetic=engine.back(M * sum(vc**2 for vc in v) / 2))
-    for a in range(k):
-        for b in range(a, k):
-            e = M * sum(Jc[a] * Jc[b] for Jc in J)
-            if e != 0:
-                loc.mass[a, b] = loc.mass[b, a] = _tidy(engine.back(e))
-        e = M * sum(Jc[a] * ac for Jc, ac in zip(J, acc, strict=True))
-        if e != 0:
-            loc.h[a] = _tidy(engine.back(e))
-    return loc
-
-
-def _particle_sympy(m: sp.Expr, r: tuple, k: int) -> Local:
-    q, qd = _qs(k)
-    J = [[rc.diff(q[a]) for a in range(k)] for rc in r]
     v = [
-        sp.Add(*(Jc[a] * qd[a] for a in range(k)), rc.diff(t)) for Jc, rc in zip(J, r, strict=True)
+        alg.add([*(Jc[a] * qd[a] for a in range(k)), rc.diff(T)])
+        for Jc, rc in zip(J, R, strict=True)
     ]
-    acc = [dt_bias(vc, k) for vc in v]
-    loc = Local("dynamics", k, kinetic=m * sp.Add(*(vc**2 for vc in v)) / 2)
+    acc = [alg.add([*(vc.diff(q[a]) * qd[a] for a in range(k)), vc.diff(T)]) for vc in v]
+    loc = Local("dynamics", k, kinetic=alg.back(M * alg.add([vc**2 for vc in v]) / 2))
     for a in range(k):
         for b in range(a, k):
-            e = _tidy(m * sp.Add(*(Jc[a] * Jc[b] for Jc in J)))
+            e = _tidy(alg.back(M * alg.add([Jc[a] * Jc[b] for Jc in J])))
             if e != 0:
                 loc.mass[a, b] = loc.mass[b, a] = e
-        e = _tidy(m * sp.Add(*(Jc[a] * ac for Jc, ac in zip(J, acc, strict=True))))
+        e = _tidy(alg.back(M * alg.add([Jc[a] * ac for Jc, ac in zip(J, acc, strict=True)])))
         if e != 0:
             loc.h[a] = e
     return loc
@@ -123,33 +107,22 @@ def _particle_sympy(m: sp.Expr, r: tuple, k: int) -> Local:
 def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
     """M and h of a kinetic or potential energy term (Lagrange's equations of L), differentiated
     in SymEngine when the expression allows (as :func:`_particle`), else in SymPy."""
-    try:
-        engine = Engine([L])
-    except Unsupported:
-        engine = None
-    if engine is not None:
-        q, qd = engine.placeholders(k)
-        Ls, T = engine.to(L), symengine.Symbol("t")
-        for a in range(k):
-            p = Ls.diff(qd[a])
-            for b in range(k):
-                e = p.diff(qd[b])
-                if e != 0:
-                    loc.mass[a, b] = _tidy(engine.back(e))
-            e = sum((p.diff(q[b]) * qd[b] for b in range(k)), p.diff(T)) - Ls.diff(q[a])
-            if e != 0:
-                loc.h[a] = _tidy(engine.back(e))
-        return loc
-    q, qd = _qs(k)
+    alg = algebra([L])
+    q, qd = alg.placeholders(k)
+    Ls, T = alg.to(L), alg.t
     for a in range(k):
-        p = L.diff(qd[a])
+        p = Ls.diff(qd[a])
         for b in range(k):
-            e = p.diff(qd[b])
+            e = _tidy(alg.back(p.diff(qd[b])))
             if e != 0:
-                loc.mass[a, b] = _tidy(e)
-        e = sp.Add(*(p.diff(q[b]) * qd[b] for b in range(k)), p.diff(t), -L.diff(q[a]))
+                loc.mass[a, b] = e
+        e = _tidy(
+            alg.back(
+                alg.add([*(p.diff(q[b]) * qd[b] for b in range(k)), p.diff(T), -Ls.diff(q[a])])
+            )
+        )
         if e != 0:
-            loc.h[a] = _tidy(e)
+            loc.h[a] = e
     return loc
 
 
