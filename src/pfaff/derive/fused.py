@@ -57,10 +57,9 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         parts = _sympy_parts(eom, rule)
     mass, acon, exprs, energies = parts
     body, outs, names = _shared_code(exprs, args)
-    fn = _function("fn", names, body, outs, MATH)
-    vfn = _vectorized(names, body, outs, exprs, args)
+    fn, vfn = _functions(names, body, outs, exprs, args)
     ebody, eouts, _ = _shared_code(energies, args)
-    efn = _vectorized(names, ebody, eouts, energies, args)
+    efn = _functions(names, ebody, eouts, energies, args)[1]
     rfn = _rhs_function(body, outs, mass, acon, n, m, len(args) - 2 * n - 1)
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
@@ -251,23 +250,26 @@ NUMPY = {
 }
 
 
-def _vectorized(names: list[str], body: list[str], outs: list[str], plain: list, args: list):
-    """``vfn``: the shared source on arrays, checked against ``fn`` at two random states;
-    ``lambdify`` when the printed code does not run on arrays (a Piecewise's ``if``)."""
-    fn = _function("vfn", names, body, outs, NUMPY)
+def _functions(
+    names: list[str], body: list[str], outs: list[str], plain: list, args: list
+) -> tuple[Callable, Callable]:
+    """``fn`` (the shared source on floats, ``math``) and its vectorized twin: the same source on
+    arrays, checked against ``fn`` at two random states, or ``lambdify`` when the printed code
+    does not run on arrays (a Piecewise's ``if``)."""
+    fn = _function("fn", names, body, outs, MATH)
+    vfn = _function("vfn", names, body, outs, NUMPY)
     try:
         rng = np.random.default_rng(3)
         x = rng.uniform(0.2, 0.9, (len(names), 2))
-        ref = _function("fn", names, body, outs, MATH)
         with np.errstate(all="ignore"):
-            got = np.array([np.broadcast_to(o, (2,)) for o in fn(*x)], dtype=float)
-        want = np.array([ref(*x[:, j]) for j in range(2)], dtype=float).T
+            got = np.array([np.broadcast_to(o, (2,)) for o in vfn(*x)], dtype=float)
+        want = np.array([fn(*x[:, j]) for j in range(2)], dtype=float).T
         if np.allclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True):
-            return fn
+            return fn, vfn
     except Exception:
         pass
     exprs = [sp.sympify(e) for e in plain]  # SymEngine's outputs back to SymPy for lambdify
-    return sp.lambdify(args, exprs, modules="numpy", cse=True, docstring_limit=0)
+    return fn, sp.lambdify(args, exprs, modules="numpy", cse=True, docstring_limit=0)
 
 
 def _llvm_factory(
