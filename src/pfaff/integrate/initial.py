@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import math
-import numbers
 from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ConstraintError, OptionError, StateError
-from pfaff.numeric.checks import check_model, check_state
+from pfaff.core.errors import ConstraintError, StateError
+from pfaff.numeric.checks import check_model, check_state, projection_options
 from pfaff.numeric.projection import ArrayLinearization, newton_projection
 from pfaff.numeric.protocol import DynamicsModel
 
@@ -92,10 +90,7 @@ def consistent_state(
     check_model(model)
     names = model.coordinate_names if isinstance(model.coordinate_names, list) else None
     t, q, qd = check_state(t, q, qd, model.n, names, ("t", "q", "qd"))
-    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not 0 < tol < math.inf:
-        raise OptionError(f"`tol` must be a positive finite number; got {tol!r:.80}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 0:
-        raise OptionError(f"`max_iter` must be an integer >= 0; got {max_iter!r:.80}")
+    tol, max_iter = projection_options(tol, max_iter)
     ind = _indices(model, independent)
     dep = np.setdiff1d(np.arange(model.n), ind)
     hol = np.asarray(model.holonomic, dtype=bool)

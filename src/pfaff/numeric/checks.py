@@ -8,12 +8,13 @@ traceback; and a value that overflowed at a state is an error naming the time.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ModelTypeError, PfaffError, StateError
+from pfaff.core.errors import ModelTypeError, OptionError, PfaffError, StateError
 from pfaff.numeric.protocol import DynamicsModel
 
 
@@ -120,6 +121,22 @@ def check_model(model: object, arg: str = "model") -> None:
     raise ModelTypeError(
         f"`{arg}` must be a compiled model (NumericModel or StructuredModel); got {kind}: {hint}"
     )
+
+
+def projection_options(tol: object, max_iter: object) -> tuple[float, int]:
+    """A projection's ``tol`` (a positive finite number) and ``max_iter`` (an integer >= 0), or
+    an :class:`OptionError` naming the argument.
+
+    Examples
+    --------
+    >>> projection_options(1e-12, 8)
+    (1e-12, 8)
+    """
+    if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not 0 < tol < math.inf:
+        raise OptionError(f"`tol` must be a positive finite number; got {tol!r:.80}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int | np.integer) or max_iter < 0:
+        raise OptionError(f"`max_iter` must be an integer >= 0; got {max_iter!r:.80}")
+    return float(tol), int(max_iter)
 
 
 def check_finite(t: float, what: str, *arrays: np.ndarray | sps.spmatrix) -> None:

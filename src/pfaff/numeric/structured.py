@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ModelError, OptionError, StateError
+from pfaff.core.errors import ModelError, StateError
 from pfaff.core.lazy import LazySeq
-from pfaff.numeric.checks import check_finite, check_state, real_number, real_vector
+from pfaff.numeric.checks import check_finite, check_state, projection_options, real_vector
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
 from pfaff.numeric.projection import ArrayLinearization, newton_projection
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
@@ -439,16 +439,7 @@ class StreamModel:
         (True, True)
         """
         t, q, qd = self._state(t, q, qd)
-        tol = real_number(tol, "tol", OptionError)
-        if (
-            not tol > 0
-            or isinstance(max_iter, bool)
-            or not isinstance(max_iter, int)
-            or max_iter < 0
-        ):
-            raise OptionError(
-                f"`tol` must be > 0 and `max_iter` an integer >= 0; got {tol!r}, {max_iter!r:.80}"
-            )
+        tol, max_iter = projection_options(tol, max_iter)
         if not self.m:
             return q, qd, 0
         return newton_projection(
@@ -456,11 +447,12 @@ class StreamModel:
         )
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
-        """(M, A, Q − h, f, g) at an unchecked state, M and A assembled as CSR."""
+        """(M, A, Q − h, f, g) at an unchecked state, M and A assembled as CSR (one pass of
+        each kernel: A, b and f from the same constraint kernel)."""
         mvals, forcing = self._dynamics(t, q, qd)
-        avals, _ = self._accel_constraints(t, q, qd)
-        f, g = self.residual(t, q, qd)
-        return self._mass(mvals), self._jacobian(avals), forcing, f, g
+        avals, b, _, f = self._constraints(t, q, qd)
+        A = self._jacobian(avals)
+        return self._mass(mvals), A, forcing, f, b + A @ qd
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
