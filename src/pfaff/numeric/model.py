@@ -111,6 +111,7 @@ class NumericModel(StreamModel):
         self.dense = solver != "sparse"
         self._pattern = None  # made on first use: the fused kernel may serve every evaluation
         self._fused: FusedKernel | None = None  # see use_fused
+        self._prefer_machine: bool | None = None  # machine-code right-hand side faster? (timed)
         # M not safely positive definite at the first state of the run (check_determined): the
         # range-space solve (M⁻¹) is unusable, the whole augmented matrix is solved by LU
         self._full_kkt = False
@@ -367,7 +368,10 @@ class NumericModel(StreamModel):
         compiled = fk.llvm() if fk.llvm is not None else None
         if compiled is None:
             return py
-        return _faster(py, _machine_rhs(compiled, py, n, [*self._p, alpha, beta, *taus]), n)
+        machine = _machine_rhs(compiled, py, n, [*self._p, alpha, beta, *taus])
+        if self._prefer_machine is None:  # timed once per model, not at every rescaling
+            self._prefer_machine = _faster(py, machine, n) is machine
+        return machine if self._prefer_machine else py
 
     def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The fused kernel's flat outputs at a state; non-real values are an error naming t."""
@@ -679,7 +683,6 @@ def _machine_rhs(compiled: Callable, py: Callable, n: int, fixed: list) -> Calla
 def _faster(a: Callable, b: Callable, n: int) -> Callable:
     """Whichever of two equal right-hand sides is faster, timed at a state (machine code wins
     from a few coordinates on; Python's generated code below, where a call's overhead rules)."""
-
     yl = [0.3 + 0.01 * i for i in range(2 * n)]
     best = []
     for fn in (a, b):
