@@ -26,3 +26,12 @@ def on_ring_manifold(coords: tuple, theta: sp.Expr | None = None) -> dict:
         rule[q.diff(t)] = thd
         rule[q] = th + 2 * sp.pi * k / n
     return rule
+
+
+def pytest_configure(config: object) -> None:
+    """The on-disk code cache of the run in a folder of its own: the user's stays untouched,
+    and tests after the first compile of a model take the cache's load path."""
+    import os
+    import tempfile
+
+    os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="pfaff-test-cache-")

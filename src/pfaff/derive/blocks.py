@@ -13,7 +13,9 @@ class Local:
     """Symbolic contributions of one template, in local coordinates ``_q0, _q1, ...``.
 
     ``mass`` holds both (a, b) and (b, a) entries; ``forcing`` is Q - h. Constraint templates fill
-    ``A``, ``b``, ``bias`` (= Ȧq̇ + ḃ) and, when holonomic, ``f``.
+    ``A``, ``b``, ``bias`` (= Ȧq̇ + ḃ) and, when holonomic, ``f``. ``engine``, for a template
+    differentiated in SymEngine, keeps its entries as SymEngine made them (``"mass"``, ``"h"``,
+    ``"kinetic"``, ``"potential"``), so code generation need not convert them back.
     """
 
     kind: str
@@ -27,6 +29,7 @@ class Local:
     b: sp.Expr = sp.S.Zero
     bias: sp.Expr = sp.S.Zero
     f: sp.Expr | None = None
+    engine: dict | None = None  # the same entries as SymEngine derived them (see templates)
 
     @property
     def forcing(self) -> dict[int, sp.Expr]:

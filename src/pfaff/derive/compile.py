@@ -11,6 +11,7 @@ both model kinds (:mod:`pfaff.derive.compile_family` for families).
 from __future__ import annotations
 
 import math
+import time
 import weakref
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -234,7 +235,10 @@ def build_model(
         solver=solver,
     )
     if not constraints_only and model.solver == "range-space":
-        fused = fused_kernel(eom)
+        start = time.process_time()
+        fused, status = fused_kernel(eom)
+        model.timings["codegen"] = time.process_time() - start
+        model.timings["cache"] = status
         if fused is not None:
             model.use_fused(fused)
     return model
@@ -243,21 +247,31 @@ def build_model(
 _FUSED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def fused_kernel(eom: Derivation) -> FusedKernel | None:
-    """The fused kernel of ``eom``, generated once per derivation: it takes the parameter values
-    at run time, so compiling again with other values (a sweep) reuses it."""
-    if eom in _FUSED:
-        return _FUSED[eom]
+def fused_kernel(eom: Derivation) -> tuple[FusedKernel | None, str]:
+    """The fused kernel of ``eom`` (generated once per derivation while a model holds it: it takes
+    the parameter values at run time, so compiling again with other values, a sweep, reuses it)
+    and where it came from: ``"reused"``, or the on-disk cache's ``"hit"``, ``"miss"``, ``"off"``.
+    (The kernel refers to ``eom`` for its machine code; the table refers to the kernel weakly.)"""
+    ref = _FUSED.get(eom)
+    fused = ref() if ref is not None else None
+    if fused is not None:
+        return fused, "reused"
     try:
-        fused = build_fused(eom)
+        fused, status = build_fused(eom)
     except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
-        fused = None
-    _FUSED[eom] = fused
-    return fused
+        fused, status = None, "off"
+    if fused is not None:
+        _FUSED[eom] = weakref.ref(fused)
+    return fused, status
 
 
 def compile_equations(
     eom: Derivation, parameters: dict, *, solver: str | None = None
 ) -> NumericModel:
     """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
-    return build_model(eom, model_parameter_values(eom, parameters), solver=solver)
+    start = time.process_time()
+    model = build_model(eom, model_parameter_values(eom, parameters), solver=solver)
+    model.timings["compile"] = time.process_time() - start
+    if "equations" in getattr(eom, "timings", {}):
+        model.timings["equations"] = eom.timings["equations"]
+    return model

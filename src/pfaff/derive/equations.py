@@ -181,6 +181,7 @@ class Derivation:
         self.holonomic = holonomic if holonomic is not None else []
         self.parameters: tuple = tuple(parameters or ())
         self.extra = extra or {}
+        self.timings: dict[str, float] = {}  # CPU seconds of the derivation (set by derive)
 
     @cached_property
     def speeds(self) -> tuple | LazySeq:

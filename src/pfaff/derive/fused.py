@@ -9,7 +9,10 @@ precomputed indices. The result is checked against the template kernels before i
 
 from __future__ import annotations
 
+import contextlib
+import json
 import math
+import pickle
 import re
 from typing import TYPE_CHECKING
 
@@ -19,6 +22,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from pfaff.core.symbols import accel, t
+from pfaff.derive import cache
 from pfaff.derive.engine import engine_safe
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
@@ -46,21 +50,27 @@ def _plain(eom: Derivation) -> tuple[dict, list[sp.Symbol]]:
     return rule, args
 
 
-def build_fused(eom: Derivation) -> FusedKernel | None:
-    """Generate the fused kernel of a small system, or None when it is too big."""
+def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
+    """Generate the fused kernel of a small system (None when it is too big) and say where its
+    code came from: ``"hit"``, ``"miss"`` or ``"off"`` (the on-disk cache).
+
+    The generated source and, once made, the machine code are kept in the on-disk cache
+    (:mod:`pfaff.derive.cache`), so a model compiled before is not generated again."""
     n, m = eom.n, eom.m
     if n + m > FUSED_LIMIT:
-        return None
-    rule, args = _plain(eom)
-    parts = _engine_parts(eom, args)
-    if parts is None:  # SymPy's assembly, renamed (a function SymEngine does not share)
-        parts = _sympy_parts(eom, rule)
-    mass, acon, exprs, energies = parts
-    body, outs, names = _shared_code(exprs, args)
-    fn, vfn = _functions(names, body, outs, exprs, args)
-    ebody, eouts, _ = _shared_code(energies, args)
-    efn = _functions(names, ebody, eouts, energies, args)[1]
-    rfn = _rhs_function(body, outs, mass, acon, n, m, len(args) - 2 * n - 1)
+        return None, "off"
+    key = cache.model_key(eom) if cache.cache_dir() is not None else None
+    code, fns = _cached_code(key, n) if key is not None else (None, None)
+    status = "off" if key is None else "hit"
+    if code is None or fns is None:
+        code, fns = _generated_code(eom)
+        status = "off" if key is None else "miss"
+        if key is not None and fns[2]:
+            cache.store(key, "code", json.dumps(code).encode())
+    mass = [tuple(x) for x in code["mass"]]
+    acon = [tuple(x) for x in code["acon"]]
+    fn, vfn, _, efn = fns
+    rfn = _rhs_function(code["body"], code["outs"], mass, acon, n, m, len(eom.parameters))
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
     index, source = [], []
@@ -84,8 +94,50 @@ def build_fused(eom: Derivation) -> FusedKernel | None:
         (off, off + n, off + n + m, off + n + 2 * m),
         tuple(i for i, _ in acon),
         tuple(j for _, j in acon),
-        _llvm_factory(mass, acon, exprs, n, m, args),
-    )
+        _llvm_factory(eom, key),
+    ), status
+
+
+def _parts(eom: Derivation) -> tuple[tuple, list]:
+    """(mass pattern, A pattern, outputs, energies) in SymEngine when possible, and the
+    arguments of the generated code."""
+    rule, args = _plain(eom)
+    parts = _engine_parts(eom, args)
+    if parts is None:  # SymPy's assembly, renamed (a function SymEngine does not share)
+        parts = _sympy_parts(eom, rule)
+    return parts, args
+
+
+def _generated_code(eom: Derivation) -> tuple[dict, tuple]:
+    """The generated source (a JSON-able dict) and its functions (fn, vfn, whether vfn is the
+    source itself, efn)."""
+    (mass, acon, exprs, energies), args = _parts(eom)
+    body, outs, names = _shared_code(exprs, args)
+    ebody, eouts, _ = _shared_code(energies, args)
+    code = {"mass": mass, "acon": acon, "names": names, "body": body, "outs": outs,
+            "ebody": ebody, "eouts": eouts}  # fmt: skip
+    fn, vfn = _functions(names, body, outs, exprs, args)
+    efn = _functions(names, ebody, eouts, energies, args)[1]
+    same = vfn.__name__ == "vfn" and efn.__name__ == "vfn"  # not lambdify's: cacheable
+    return code, (fn, vfn, same, efn)
+
+
+def _cached_code(key: str, n: int) -> tuple[dict | None, tuple | None]:
+    """The cached source of ``key`` and its functions, checked as when generated; (None, None)
+    when absent or when its vectorized twin does not pass the check."""
+    raw = cache.load(key, "code")
+    if raw is None:
+        return None, None
+    try:
+        code = json.loads(raw)
+        names, body, outs = code["names"], code["body"], code["outs"]
+        fn, vfn = _functions(names, body, outs, None, [])
+        efn = _functions(names, code["ebody"], code["eouts"], None, [])[1]
+    except Exception:
+        return None, None
+    if vfn is None or efn is None or len(names) < 1 + 2 * n:
+        return None, None
+    return code, (fn, vfn, True, efn)
 
 
 def _sympy_parts(eom: Derivation, rule: dict) -> tuple:
@@ -134,9 +186,10 @@ def _engine_parts(eom: Derivation, args: list) -> tuple | None:
     try:
         for block in eom.blocks:
             loc = block.local
-            exprs = [*loc.mass.values(), *loc.h.values(), *loc.Q.values(), *loc.A.values()]
-            exprs += [loc.b, loc.bias, loc.kinetic, loc.potential]
+            exprs = [*loc.Q.values(), *loc.A.values(), loc.b, loc.bias]
             exprs += [] if loc.f is None else [loc.f]
+            if loc.engine is None:  # derived in SymPy: the round trip must be exact
+                exprs += [*loc.mass.values(), *loc.h.values(), loc.kinetic, loc.potential]
             if not engine_safe(exprs):
                 return None
             conv = _Converted(loc)
@@ -171,16 +224,22 @@ def _engine_parts(eom: Derivation, args: list) -> tuple | None:
 
 
 class _Converted:
-    """A template's local forms in SymEngine, converted once."""
+    """A template's local forms in SymEngine: as SymEngine derived them (``loc.engine``), or
+    converted once."""
 
     def __init__(self, loc: object) -> None:
         c = symengine.sympify
-        self.mass = {key: c(e) for key, e in loc.mass.items()}
-        self.h = {a: c(e) for a, e in loc.h.items()}
+        eng = loc.engine
+        if eng is not None:
+            self.mass, self.h = eng["mass"], eng["h"]
+            self.kinetic, self.potential = c(eng["kinetic"]), c(eng["potential"])
+        else:
+            self.mass = {key: c(e) for key, e in loc.mass.items()}
+            self.h = {a: c(e) for a, e in loc.h.items()}
+            self.kinetic, self.potential = c(loc.kinetic), c(loc.potential)
         self.Q = {a: c(e) for a, e in loc.Q.items()}
         self.A = {a: c(e) for a, e in loc.A.items()}
         self.b, self.bias = c(loc.b), c(loc.bias)
-        self.kinetic, self.potential = c(loc.kinetic), c(loc.potential)
         self.f = None if loc.f is None else c(loc.f)
 
 
@@ -251,11 +310,11 @@ NUMPY = {
 
 
 def _functions(
-    names: list[str], body: list[str], outs: list[str], plain: list, args: list
-) -> tuple[Callable, Callable]:
+    names: list[str], body: list[str], outs: list[str], plain: list | None, args: list
+) -> tuple[Callable, Callable | None]:
     """``fn`` (the shared source on floats, ``math``) and its vectorized twin: the same source on
-    arrays, checked against ``fn`` at two random states, or ``lambdify`` when the printed code
-    does not run on arrays (a Piecewise's ``if``)."""
+    arrays, checked against ``fn`` at two random states, or ``lambdify`` of ``plain`` when the
+    printed code does not run on arrays (a Piecewise's ``if``; None without ``plain``)."""
     fn = _function("fn", names, body, outs, MATH)
     vfn = _function("vfn", names, body, outs, NUMPY)
     try:
@@ -268,27 +327,37 @@ def _functions(
             return fn, vfn
     except Exception:
         pass
+    if plain is None:
+        return fn, None
     exprs = [sp.sympify(e) for e in plain]  # SymEngine's outputs back to SymPy for lambdify
     return fn, sp.lambdify(args, exprs, modules="numpy", cse=True, docstring_limit=0)
 
 
-def _llvm_factory(
-    mass: list, acon: list, exprs: list, n: int, m: int, args: list
-) -> Callable[[], Callable | None]:
+def _llvm_factory(eom: Derivation, key: str | None) -> Callable[[], Callable | None]:
     """``llvm`` of :class:`FusedKernel`: the right-hand side [q̇, q̈] as SymEngine expressions
     (the kernel's outputs, the constraint rows, and the floored Schur solve run on them by
     :func:`pfaff.numeric.smallsolve.schur_expressions`: the algorithm and floor of ``rfn``),
-    compiled by SymEngine's LLVM backend on first use."""
+    compiled by SymEngine's LLVM backend on first use, or loaded from the on-disk cache. It
+    holds ``eom`` (whose expressions it compiles) for as long as a model holds the kernel."""
     done: list = []
 
     def make() -> Callable | None:
         if done:
             return done[0]
         done.append(None)
+        raw = cache.load(key, "llvm") if key is not None else None
+        if raw is not None:
+            with contextlib.suppress(Exception):
+                done[0] = pickle.loads(raw)  # our own entry: private folder, hash verified
+                return done[0]
         try:
-            done[0] = _llvm_rhs(mass, acon, exprs, n, m, args)
+            (mass, acon, exprs, _), args = _parts(eom)
+            done[0] = _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
         except Exception:
-            done[0] = None
+            return None
+        if key is not None:
+            with contextlib.suppress(Exception):
+                cache.store(key, "llvm", pickle.dumps(done[0]))
         return done[0]
 
     return make

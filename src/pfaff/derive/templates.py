@@ -13,6 +13,7 @@ differentiated or simplified at the size of the whole system.
 from __future__ import annotations
 
 import itertools
+import time
 
 import numpy as np
 import sympy as sp
@@ -92,16 +93,41 @@ def _particle_in(alg: Engine | Plain, m: sp.Expr, r: tuple, k: int) -> Local:
         for Jc, rc in zip(J, R, strict=True)
     ]
     acc = [alg.add([*(vc.diff(q[a]) * qd[a] for a in range(k)), vc.diff(T)]) for vc in v]
-    loc = Local("dynamics", k, kinetic=alg.back(M * alg.add([vc**2 for vc in v]) / 2))
+    kinetic = M * alg.add([vc**2 for vc in v]) / 2
+    loc = Local("dynamics", k, kinetic=alg.back(kinetic))
+    kept = _Kept(alg, loc, kinetic=kinetic)
     for a in range(k):
         for b in range(a, k):
-            e = _tidy(alg.back(M * alg.add([Jc[a] * Jc[b] for Jc in J])))
-            if e != 0:
-                loc.mass[a, b] = loc.mass[b, a] = e
-        e = _tidy(alg.back(M * alg.add([Jc[a] * ac for Jc, ac in zip(J, acc, strict=True)])))
-        if e != 0:
-            loc.h[a] = e
+            kept.mass(a, b, M * alg.add([Jc[a] * Jc[b] for Jc in J]), symmetric=True)
+        kept.h(a, M * alg.add([Jc[a] * ac for Jc, ac in zip(J, acc, strict=True)]))
     return loc
+
+
+class _Kept:
+    """Stores a template's entries in SymPy (tidied, zeros dropped) and, when the algebra is
+    SymEngine, the same entries as SymEngine made them in ``loc.engine``."""
+
+    def __init__(self, alg: Engine | Plain, loc: Local, **energies: object) -> None:
+        self.alg, self.loc = alg, loc
+        if isinstance(alg, Engine):
+            loc.engine = {"mass": {}, "h": {}, "kinetic": 0, "potential": 0, **energies}
+
+    def mass(self, a: int, b: int, raw: object, *, symmetric: bool = False) -> None:
+        e = _tidy(self.alg.back(raw))
+        if e == 0:
+            return
+        keys = [(a, b), (b, a)] if symmetric else [(a, b)]
+        for key in keys:
+            self.loc.mass[key] = e
+            if self.loc.engine is not None:
+                self.loc.engine["mass"][key] = raw
+
+    def h(self, a: int, raw: object) -> None:
+        e = _tidy(self.alg.back(raw))
+        if e != 0:
+            self.loc.h[a] = e
+            if self.loc.engine is not None:
+                self.loc.engine["h"][a] = raw
 
 
 def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
@@ -110,19 +136,13 @@ def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
     alg = algebra([L])
     q, qd = alg.placeholders(k)
     Ls, T = alg.to(L), alg.t
+    energy = {"kinetic": Ls} if loc.potential == 0 else {"potential": -Ls}
+    kept = _Kept(alg, loc, **energy)
     for a in range(k):
         p = Ls.diff(qd[a])
         for b in range(k):
-            e = _tidy(alg.back(p.diff(qd[b])))
-            if e != 0:
-                loc.mass[a, b] = e
-        e = _tidy(
-            alg.back(
-                alg.add([*(p.diff(q[b]) * qd[b] for b in range(k)), p.diff(T), -Ls.diff(q[a])])
-            )
-        )
-        if e != 0:
-            loc.h[a] = e
+            kept.mass(a, b, p.diff(qd[b]))
+        kept.h(a, alg.add([*(p.diff(q[b]) * qd[b] for b in range(k)), p.diff(T), -Ls.diff(q[a])]))
     return loc
 
 
@@ -213,9 +233,11 @@ def derive(system: SystemSpec) -> Derivation:
     """Derive the equations of motion of ``system`` and check its constraints for redundancy."""
     if system.n == 0:
         raise ModelError("a system needs at least one coordinate (ordinary or in a family)")
+    start = time.process_time()
     blocks = group(system)  # a family block is its template and index progressions: O(1)
     # before anything of size n: the Derivation's constraint names and flags are per row
     check_memory(system.n, system.n_constraints, blocks)
     eom = Derivation(system, blocks)
     check_constraint_rank(eom)
+    eom.timings = {"equations": time.process_time() - start}
     return eom

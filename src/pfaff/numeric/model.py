@@ -71,6 +71,11 @@ class NumericModel(StreamModel):
     coordinate_names, multiplier_names : list of str
     parameters : dict
         Parameter name -> value used.
+    timings : dict
+        CPU seconds of the stages that made the model: ``equations``, ``compile`` (its
+        ``codegen`` part: the fused kernel, generated or loaded from the on-disk cache, see
+        ``cache``: ``"hit"``, ``"miss"`` or ``"off"``) and, once the first simulation has made or
+        loaded it, ``machine_code``.
 
     Examples
     --------
@@ -100,6 +105,7 @@ class NumericModel(StreamModel):
             holonomic=holonomic, parameters=parameters, multiplier_names=multiplier_names,
         )  # fmt: skip
         self._p = list(self.parameters.values())  # in the order of the fused kernel's arguments
+        self.timings: dict[str, float | str] = {}
         self._holonomic_list: list[bool] = self.holonomic.tolist()
         if solver is None:
             solver = "range-space" if n + m <= DENSE_LIMIT else "sparse"
@@ -365,7 +371,9 @@ class NumericModel(StreamModel):
         taus = [0.0] * self.m if scales is None else (FLOOR * np.asarray(scales)).tolist()
         taus.append(FLOOR if scales is not None else 0.0)  # the cap factor
         py = fk.rfn(*self._p, alpha, beta, *taus, slow)
+        start = time.process_time()
         compiled = fk.llvm() if fk.llvm is not None else None
+        self.timings.setdefault("machine_code", time.process_time() - start)
         if compiled is None:
             return py
         machine = _machine_rhs(compiled, py, n, [*self._p, alpha, beta, *taus])
