@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import argparse
 import gc
+import os
+import tempfile
 import time
 import timeit
 
@@ -38,6 +40,8 @@ import sympy.physics.mechanics as me
 from scipy.integrate import solve_ivp
 from sympy.core.cache import clear_cache
 from sympy.physics.mechanics.models import n_link_pendulum_on_cart
+
+os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp()  # cold: pfaff's code cache starts empty
 
 import pfaff
 

@@ -10,9 +10,10 @@ The package is laid out by pipeline stage, imports going only downward (see ARCH
 :mod:`pfaff.cli`.
 """
 
-from pfaff import models
+from pfaff import attitude, models
 from pfaff.api import EquationsOfMotion, Solution, System
 from pfaff.core.errors import (
+    BodyInertiaError,
     ConstraintError,
     InertiaError,
     ModelError,
@@ -27,12 +28,18 @@ from pfaff.core.symbols import coordinates, t
 from pfaff.derive.work import ForceWork
 from pfaff.integrate.initial import consistent_state
 from pfaff.integrate.simulation import simulate
+from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
+from pfaff.mechanics.bodies import Body
 from pfaff.numeric import NumericModel
 from pfaff.results.trajectory import Trajectory
 
 __all__ = [
+    "MRP",
+    "Body",
+    "BodyInertiaError",
     "ConstraintError",
     "EquationsOfMotion",
+    "EulerAngles",
     "ForceWork",
     "InertiaError",
     "ModelError",
@@ -41,11 +48,14 @@ __all__ = [
     "OptionError",
     "ParameterError",
     "PfaffError",
+    "PlanarAngle",
+    "Quaternion",
     "SimulationError",
     "Solution",
     "StateError",
     "System",
     "Trajectory",
+    "attitude",
     "consistent_state",
     "coordinates",
     "models",

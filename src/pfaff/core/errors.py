@@ -47,6 +47,11 @@ class InertiaError(ConstraintError):
     """
 
 
+class BodyInertiaError(ModelError, InertiaError):
+    """A rigid body's inertia is impossible: not symmetric, not positive definite, or principal
+    moments violating the triangle inequality (both a model error and an inertia error)."""
+
+
 class ParameterError(PfaffError):
     """Numeric parameter values are missing, unknown or not finite."""
 

@@ -234,6 +234,7 @@ def build_model(
         parameters={p.name: v for p, v in zip(params, values, strict=True)},
         solver=solver,
     )
+    model.attitudes = attitude_sets(eom)
     if not constraints_only and model.solver == "range-space":
         start = time.process_time()
         fused, status = fused_kernel(eom)
@@ -242,6 +243,17 @@ def build_model(
         if fused is not None:
             model.use_fused(fused)
     return model
+
+
+def attitude_sets(eom: Derivation) -> list[tuple[str, str, tuple[int, ...], str]]:
+    """Per rigid body: (name, kind of attitude set, coordinate indices, Euler sequence or "")."""
+    system = getattr(eom, "system", None)
+    out = []
+    for body in getattr(system, "bodies", ()):
+        att = body.attitude
+        idx = tuple(system._index[q] for q in att.coordinates)
+        out.append((body.name, att.kind, idx, getattr(att, "sequence", "")))
+    return out
 
 
 _FUSED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

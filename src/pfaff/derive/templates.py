@@ -188,6 +188,18 @@ def derive_template(key: tuple, k: int) -> Local:
         return _force(key, k)
     if kind == "genforce":
         return Local("dynamics", k, Q={key[1]: key[2]})
+    if kind == "torque":  # Q_a = τ_body · ∂ω/∂q̇_a
+        _, qd = _qs(k)
+        tau, w = key[2:5], key[5:8]
+        Q = {
+            a: sp.Add(*(ti * wi.diff(qd[a]) for ti, wi in zip(tau, w, strict=True)))
+            for a in range(k)
+        }
+        return Local("dynamics", k, Q={a: e for a, e in Q.items() if e != 0})
+    if kind == "dissipation":  # Q_a = −∂R/∂q̇_a
+        _, qd = _qs(k)
+        Q = {a: -key[2].diff(qd[a]) for a in range(k)}
+        return Local("dynamics", k, Q={a: e for a, e in Q.items() if e != 0})
     return _constraint(key, k)
 
 

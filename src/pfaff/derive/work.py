@@ -31,7 +31,9 @@ class ForceWork:
     ----------
     name : str
     force : Matrix, shape (d, 1) or None
-        Force components (None for a generalized force given directly).
+        Force components; for a torque its body-axis components (then ``point`` is None and
+        ``admissible_point_velocity`` is the body's admissible angular velocity); None for a
+        generalized force given directly or a dissipation function.
     point : Matrix, shape (d, 1) or None
         Position of the point the force acts on.
     generalized_force : Matrix, shape (n, 1)
@@ -163,7 +165,7 @@ def work(system: SystemSpec, independent: list | None = None) -> list[ForceWork]
     u = sp.Matrix(speeds)
     out = []
     for p in system.pieces:
-        if p.kind not in ("force", "genforce"):
+        if p.kind not in ("force", "genforce", "torque", "dissipation"):
             continue
         if p.kind == "force":
             F = sp.Matrix(p.exprs[: p.dim])
@@ -171,6 +173,14 @@ def work(system: SystemSpec, independent: list | None = None) -> list[ForceWork]
             J = r.jacobian(sp.Matrix(coords))
             Q = (J.T * F).applyfunc(sp.expand)
             JN = (J * N).applyfunc(tidy)
+        elif p.kind == "torque":  # τ (body axes) and the partial angular velocities ∂ω/∂q̇
+            F, r = sp.Matrix(p.exprs[:3]), None
+            Jw = sp.Matrix(p.exprs[3:]).jacobian(sp.Matrix([q.diff(t) for q in coords]))
+            Q = (Jw.T * F).applyfunc(sp.expand)
+            JN = (Jw * N).applyfunc(tidy)
+        elif p.kind == "dissipation":  # Q = −∂R/∂q̇
+            F = r = JN = None
+            Q = sp.Matrix([-p.exprs[0].diff(q.diff(t)) for q in coords])
         else:
             F = r = JN = None
             Q = sp.zeros(len(coords), 1)

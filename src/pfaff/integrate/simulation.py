@@ -23,6 +23,7 @@ from pfaff.core.errors import (
     raised_in_generated_code,
     undefined_at,
 )
+from pfaff.integrate.events import SINGULAR, AttitudeEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.numeric.checks import check_model, check_state
@@ -308,10 +309,12 @@ def simulate(
         project_output = method != "baumgarte"
     power = model.power_function() if model.applied_power else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
+    run.events = AttitudeEvents(getattr(model, "attitudes", ()))
+    run.restart = lambda t, q, qd: METHODS[method](model, t, q, qd, t1, opts)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
         raise SimulationError(message)
-    stats = {**stepper.finish(), **projector.stats, "cpu_time": run.cpu}
+    stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
     return _trajectory(model, method, run, status, message, stats, projector, project_output)
 
 
@@ -329,6 +332,35 @@ class _Run:
         self.QD: list[np.ndarray] = []
         self.W: list[float] = []  # work of the applied forces from t0 to each recorded time
         self.cpu = 0.0
+        self.events = AttitudeEvents(())  # MRP switching, Euler singularity (set by simulate)
+        self.restart = None  # (t, q, q̇) -> a new stepper, after a switch
+        self.switches: list[tuple[float, str]] = []
+        self._done: list[dict] = []  # the statistics of steppers replaced after a switch
+
+    def finish(self) -> dict:
+        """The steppers' statistics, summed over restarts."""
+        stats = dict(self.stepper.finish())
+        for old in self._done:
+            for key, v in old.items():
+                if isinstance(v, int | float) and isinstance(stats.get(key), int | float):
+                    stats[key] += v
+        if self._done:
+            stats["restarts"] = len(self._done)
+        return stats
+
+    def _event(self, st) -> tuple[np.ndarray, np.ndarray] | None:
+        """After an accepted step: stop at an Euler singularity; switch MRPs (and restart)."""
+        q, qd = st.state()
+        message = self.events.singular(q)
+        if message is not None:
+            raise _Singular(message)
+        q2, qd2, names = self.events.switch(q, qd)
+        if not names:
+            return None
+        self.switches += [(float(st.t), name) for name in names]
+        self._done.append(dict(st.finish()))
+        self.stepper = self.restart(st.t, q2, qd2)
+        return q2, qd2
 
     def _record(self, t: float, q: np.ndarray, qd: np.ndarray, project: bool, w: float) -> None:
         if project and self.projector is not None:
@@ -374,7 +406,10 @@ class _Run:
                 st.step()
                 if te is None:
                     step_work = self._work()
-                    self._record(st.t, *st.state(), self.project_steps, work + step_work)
+                    done = st
+                    switched = self._event(st) if self.events else None
+                    state = done.state() if switched is None else switched
+                    self._record(done.t, *state, self.project_steps, work + step_work)
                 else:
                     j = int(np.searchsorted(te, st.t, side="right"))
                     if j > k:
@@ -382,13 +417,21 @@ class _Run:
                             self._record(float(ti), q, qd, True, work + self._work(float(ti)))
                         k = j
                     step_work = self._work()
+                    if self.events:
+                        self._event(st)
                 work += step_work
+                st = self.stepper
                 if bar is not None:
                     bar.update(st.t - t_prev)
         except KeyboardInterrupt:
             status, message = "interrupted", f"interrupted by the user at t = {st.t:.17g}"
+        except _Singular as e:
+            status, message = "failed", f"stopped at t = {st.t:.17g}: {e}"
         except (PfaffError, FloatingPointError, np.linalg.LinAlgError) as e:
             status, message = "failed", f"failed at t = {st.t:.17g}: {e}"
+            near = self.events.singular(st.state()[0], 10 * SINGULAR) if self.events else None
+            if near is not None:  # the integrator gave up just before the check would stop it
+                message += f" ({near})"
         except (ValueError, ArithmeticError) as e:
             if not raised_in_generated_code(e):  # a bug in pfaff: surface it as one
                 raise
@@ -399,6 +442,10 @@ class _Run:
             if bar is not None:
                 bar.close()
         return status, message
+
+
+class _Singular(Exception):
+    """An attitude set reached its singularity: the run stops (status "failed")."""
 
 
 def _stacked(rows: list, n: int) -> np.ndarray:
@@ -440,4 +487,5 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         multiplier_names=list(model.multiplier_names),
         parameters=dict(model.parameters),
         projector=projector if project_output else None,
+        switches=list(run.switches),
     )

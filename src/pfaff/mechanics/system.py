@@ -27,9 +27,13 @@ from pfaff.core.symbols import (
     t,
     validate_coordinates,
 )
+from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
 
-PIECE_KINDS = ("particle", "kinetic", "potential", "force", "genforce", "holonomic", "velocity")
+PIECE_KINDS = (
+    "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
+    "holonomic", "velocity",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -96,7 +100,7 @@ def _slot_name(system: SystemSpec, slot: int | Ref) -> str:
     return f"Derivative({slot.family.name}[{slot.stride}*{slot.index} + {slot.shift}], t)"
 
 
-class SystemSpec:
+class SystemSpec(ElementsMixin):
     """A constrained mechanical system as data: coordinates, pieces and their local forms.
 
     This is the model stage: every ``add_*`` method validates its piece when it is added. The
@@ -127,6 +131,7 @@ class SystemSpec:
         self._constraint_keys: dict[tuple, str] = {}
         self._counts: dict[str, int] = dict.fromkeys(PIECE_KINDS, 0)
         self._pending_refs: dict = {}
+        self.bodies: list = []  # rigid bodies (add_rigid_body), in order
 
     # ------------------------------------------------------------------ inspection helpers
     @property

@@ -106,6 +106,9 @@ class NumericModel(StreamModel):
         )  # fmt: skip
         self._p = list(self.parameters.values())  # in the order of the fused kernel's arguments
         self.timings: dict[str, float | str] = {}
+        # per rigid body: (name, attitude kind, coordinate indices, Euler sequence); see
+        # pfaff.integrate.events (MRP switching, the Euler-angle singularity)
+        self.attitudes: list[tuple[str, str, tuple[int, ...], str]] = []
         self._holonomic_list: list[bool] = self.holonomic.tolist()
         if solver is None:
             solver = "range-space" if n + m <= DENSE_LIMIT else "sparse"

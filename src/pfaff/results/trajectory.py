@@ -44,6 +44,8 @@ class Trajectory:
         ``"success"``, ``"failed"`` or ``"interrupted"``; ``message`` says why.
     method : str
     coordinate_names, multiplier_names : list of str
+    switches : list of (float, str)
+        (t, body name) of every MRP shadow-set switch (empty without MRPs).
 
     Examples
     --------
@@ -73,6 +75,7 @@ class Trajectory:
         self.multiplier_names: list[str] = fields["multiplier_names"]
         self.parameters: dict = fields.get("parameters", {})
         self._projector = fields.get("projector")
+        self.switches: list[tuple[float, str]] = list(fields.get("switches", []))
 
     # ------------------------------------------------------------------ derived quantities
     @property
