@@ -7,34 +7,16 @@ made by a user compares equal to them.
 
 from __future__ import annotations
 
-import keyword
-
 import numpy as np
 import sympy as sp
 
 from pfaff.api import System
 from pfaff.core.errors import ModelError, ModelTypeError
-from pfaff.core.symbols import as_expr, coordinates
+from pfaff.core.symbols import coordinates
+from pfaff.models.params import _param
 from pfaff.numeric.checks import real_number
 
 FAMILY_FROM = 1024  # rolling_ring(n) uses the family form above this n unless told otherwise
-
-
-def _param(value: object, default: str, arg: str) -> sp.Expr:
-    """A model parameter: the default symbol, a number or expression, or a plain name.
-
-    A string is a name (a new symbol) or it is refused: it is never parsed or evaluated.
-    """
-    if value is None or value is True:
-        return sp.Symbol(default)
-    if isinstance(value, str):
-        if value.isidentifier() and not keyword.iskeyword(value):
-            return sp.Symbol(value)
-        raise ModelTypeError(
-            f"`{arg}` must be a number, a SymPy expression or a plain name; got the string "
-            f"{value!r} (a string is taken as a name, never evaluated)"
-        )
-    return as_expr(value, f"`{arg}`")
 
 
 def rolling_ring(
@@ -283,3 +265,12 @@ def n_link_pendulum_on_cart(n: int) -> System:
     s.add_potential_energy(V, name="gravity")
     s.add_generalized_force(q[0], F, name="push")
     return s
+
+
+from pfaff.models.bodies import (  # noqa: E402, F401  (the rigid-body zoo)
+    heavy_top,
+    rolling_disk,
+    rolling_on_incline,
+    spherical_pendulum,
+    torque_free_body,
+)
