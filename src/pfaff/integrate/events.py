@@ -59,15 +59,21 @@ class AttitudeEvents:
                 names.append(name)
         return q, qd, names
 
-    def singular(self, q: np.ndarray, threshold: float = SINGULAR) -> str | None:
-        """A message when some Euler angles are at their singularity, else None."""
+    def singular(
+        self, q: np.ndarray, threshold: float = SINGULAR, before: np.ndarray | None = None
+    ) -> str | None:
+        """A message when some Euler angles are at their singularity (or crossed it since the
+        state ``before``: a step may jump over the neighbourhood), else None."""
         for name, i, seq, symmetric in self.eulers:
-            value = math.sin(q[i]) if symmetric else math.cos(q[i])
-            if abs(value) < threshold:
-                fn = "sin" if symmetric else "cos"
+            fn = math.sin if symmetric else math.cos
+            value = fn(q[i])
+            crossed = before is not None and value * fn(before[i]) < 0
+            if abs(value) < threshold or crossed:
+                name_fn = "sin" if symmetric else "cos"
+                where = "crossed zero" if crossed else f"= {abs(value):.3g} < {threshold:g}"
                 return (
                     f"the {seq} Euler angles of body `{name}` reached their singularity (gimbal "
-                    f"lock): |{fn}(second angle)| = {abs(value):.3g} < {threshold:g}, where the "
+                    f"lock): |{name_fn}(second angle)| {where}, where the "
                     "angle rates grow without bound; use a quaternion (pfaff.attitude.Quaternion) "
                     "or MRPs (pfaff.attitude.MRP) for this motion, or Euler angles whose "
                     "singular attitude the motion avoids"

@@ -336,6 +336,7 @@ class _Run:
         self.restart = None  # (t, q, q̇) -> a new stepper, after a switch
         self.switches: list[tuple[float, str]] = []
         self._done: list[dict] = []  # the statistics of steppers replaced after a switch
+        self._last_q: np.ndarray | None = None  # the state of the last event check
 
     def finish(self) -> dict:
         """The steppers' statistics, summed over restarts."""
@@ -351,7 +352,8 @@ class _Run:
     def _event(self, st) -> tuple[np.ndarray, np.ndarray] | None:
         """After an accepted step: stop at an Euler singularity; switch MRPs (and restart)."""
         q, qd = st.state()
-        message = self.events.singular(q)
+        message = self.events.singular(q, before=self._last_q)
+        self._last_q = q
         if message is not None:
             raise _Singular(message)
         q2, qd2, names = self.events.switch(q, qd)
@@ -365,6 +367,8 @@ class _Run:
     def _record(self, t: float, q: np.ndarray, qd: np.ndarray, project: bool, w: float) -> None:
         if project and self.projector is not None:
             q, qd, _ = self.projector(t, q, qd)
+        if self.events.mrps:  # a dense-output point past |σ| = 1, before the step's switch
+            q, qd, _ = self.events.switch(q, qd)
         self.T.append(t)
         self.Q.append(np.array(q))
         self.QD.append(np.array(qd))
