@@ -101,7 +101,59 @@ def build_parser() -> argparse.ArgumentParser:
         "--plot", metavar="FILE.png", help="write a figure of the run (implies --simulate)"
     )
     _simulation_options(pend)
+    _body_demos(dsub)
     return p
+
+
+def _body_demos(dsub: argparse._SubParsersAction) -> None:
+    """``pfaff demo tumble|top|disk``: rigid bodies and attitude sets."""
+    for name, text, t_end in (
+        ("tumble", "the intermediate-axis flip of a torque-free body (ω, energy, |H|, MRP switches)", 40.0),
+        ("top", "a heavy symmetric top on a steady precession", 3.0),
+        ("disk", "a thin disk rolling without slip on a steady circle (contact forces)", 3.0),
+    ):  # fmt: skip
+        d = dsub.add_parser(name, help=text)
+        _debug_option(d)
+        if name != "disk":
+            d.add_argument(
+                "--attitude",
+                choices=["euler", "quaternion", "mrp"],
+                default="quaternion" if name == "tumble" else "euler",
+                help="attitude coordinates of the body",
+            )
+        if name == "tumble":
+            d.add_argument(
+                "--sequence",
+                help="Euler-angle sequence with --attitude euler (default 231, which this motion "
+                "keeps clear of its singularity; 321 passes close to gimbal lock)",
+            )
+        d.add_argument(
+            "--t-end", type=_positive, default=t_end, help=f"end time (default {t_end:g})"
+        )
+        d.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+        d.add_argument("--plot", metavar="FILE.png", help="write a figure of the run")
+
+
+def run_body_demo(args: argparse.Namespace) -> int:
+    """``pfaff demo tumble|top|disk``: 0 on success, 3 when the run failed (e.g. at gimbal lock)."""
+    from pfaff.cli import bodydemo
+
+    if args.demo == "tumble":
+        rep, traj = bodydemo.tumble(args.attitude, t_end=args.t_end, sequence=args.sequence)
+    elif args.demo == "top":
+        rep, traj = bodydemo.top(args.attitude, t_end=args.t_end)
+    else:
+        rep, traj = bodydemo.disk(t_end=args.t_end)
+    if args.plot:
+        traj.plot(args.plot)
+        rep["plot"] = args.plot
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print(bodydemo.format_body(rep))
+        if args.plot:
+            print(f"Wrote {args.plot}")
+    return 0 if traj.status == "success" else 3
 
 
 def _debug_option(p: argparse.ArgumentParser, default: object = argparse.SUPPRESS) -> None:
@@ -319,6 +371,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.show_help()
         return 0
     try:
+        if args.demo in ("tumble", "top", "disk"):
+            check_files(args)
+            return run_body_demo(args)
         _resolve_simulation(args)
         check_files(args)
         if args.demo == "ring":
