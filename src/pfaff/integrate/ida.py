@@ -67,6 +67,10 @@ class IDAStepper:
             max_num_steps=1_000_000,
             **kw,
         )
+        # M singular (quaternion coordinates): the augmented Lagrangian M + ρAᵀA (see _residual)
+        self.rho = (
+            self._augmentation(t0, q0, qd0) if getattr(model, "mass_singular", False) else 0.0
+        )
         qdd0, lam0 = model.solve(t0, q0, qd0)
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
@@ -92,13 +96,27 @@ class IDAStepper:
             M, A = M.toarray(), A.toarray()
         return M, A, forcing, f, g
 
+    def _augmentation(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        """ρ of M + ρAᵀA, of the size of M's diagonal against AᵀA's."""
+        M, A, *_ = self.model.dae_blocks(t, q, qd)
+        M, A = (x.toarray() if sps.issparse(x) else x for x in (M, A))
+        return float(np.abs(np.diag(M)).max() / max((A * A).sum(axis=0).max(), 1e-300))
+
     def _residual(self, t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray) -> None:
+        """The GGL residuals. With a singular M the dynamic rows are those of the augmented
+        Lagrangian, (M + ρAᵀA) v' − (Q − h) − Aᵀλ + ρAᵀ(Ȧv + ḃ): the added ρAᵀ(A v' + Ȧv + ḃ)
+        vanishes on every motion (its acceleration constraint), so the solution is the same,
+        but v' is determined by these rows alone (index 2 again, not 3 along M's null space)."""
         n, m = self.n, self.m
         M, A, forcing, f, g = self._blocks(t, y)
         lam, mu = y[2 * n : 2 * n + m], y[2 * n + m :]
         Ah = A[self.hrows]
         res[:n] = yp[:n] - y[n : 2 * n] - Ah.T @ mu
-        res[n : 2 * n] = M @ yp[n : 2 * n] - forcing - A.T @ lam
+        vp = yp[n : 2 * n]
+        res[n : 2 * n] = M @ vp - forcing - A.T @ lam
+        if self.rho:
+            bias = self.model.constraint_bias(t, y[:n], y[n : 2 * n])
+            res[n : 2 * n] += self.rho * (A.T @ (A @ vp + bias))
         res[2 * n : 2 * n + m] = g
         res[2 * n + m :] = f[self.hrows]
 
@@ -116,6 +134,8 @@ class IDAStepper:
         """
         n, m, mh = self.n, self.m, self.mh
         M, A, *_ = self._blocks(t, y)
+        if self.rho:  # the augmented Lagrangian's mass matrix (see _residual)
+            M = M + self.rho * (A.T @ A)
         Ah = A[self.hrows]
         JJ[:, :] = 0.0
         idx = np.arange(n)

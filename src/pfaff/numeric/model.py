@@ -354,6 +354,16 @@ class NumericModel(StreamModel):
             K = sps.csr_matrix(K)
         return K[:n, :n], K[n:, :n], forcing, f, g
 
+    @property
+    def mass_singular(self) -> bool:
+        """True when M was found singular (or nearly) at the last :meth:`check_determined`: the
+        augmented system is still regular (quaternion coordinates), but M⁻¹ is not to be used."""
+        return self._full_kkt
+
+    def constraint_bias(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """Ȧq̇ + ḃ at an unchecked state, shape (m,): A q̈ = −(Ȧq̇ + ḃ) on a motion."""
+        return np.asarray(self._kkt(t, q, qd)[3], dtype=float)
+
     def _fused_rhs(self, alpha: float, beta: float, scales: np.ndarray | None):
         """``rhs(t, y: list) -> list`` of a fused model for given reference row sizes: the fused
         kernel and the generated floored range-space solve in one function; the array path where
