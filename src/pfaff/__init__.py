@@ -30,6 +30,7 @@ from pfaff.integrate.initial import consistent_state
 from pfaff.integrate.simulation import simulate
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 from pfaff.mechanics.bodies import Body
+from pfaff.modelfile import ModelFile, ModelFileError, load_model
 from pfaff.numeric import NumericModel
 from pfaff.results.trajectory import Trajectory
 
@@ -43,6 +44,8 @@ __all__ = [
     "ForceWork",
     "InertiaError",
     "ModelError",
+    "ModelFile",
+    "ModelFileError",
     "ModelTypeError",
     "NumericModel",
     "OptionError",
@@ -58,6 +61,7 @@ __all__ = [
     "attitude",
     "consistent_state",
     "coordinates",
+    "load_model",
     "models",
     "simulate",
     "t",

@@ -1,0 +1,584 @@
+"""Model files: a system described in TOML, read without running anything the file says.
+
+The file is untrusted input. Its size is capped before it is read whole; TOML is parsed by the
+standard library's ``tomllib`` (data only); every expression goes through
+:func:`pfaff.core.safe_expr.parse_expression` (an ``ast`` whitelist that builds SymPy objects
+directly: no ``eval``, ``sympify`` or ``parse_expr``); every name is a declared coordinate,
+parameter, family or body, or ``t``. Errors name the file, the key and the problem.
+
+The format (see ``examples/`` and the README)::
+
+    [model]
+    name = "double pendulum"
+    coordinates = ["theta1", "theta2"]
+    parameters = { m1 = 1.0, l1 = 1.0, g = 9.81 }
+    kinetic = "..."            # optional energy terms (a string or a list of strings)
+    potential = "..."
+    dissipation = "..."        # a Rayleigh function R(q, dot(q)): Q = -dR/d(dot q)
+
+    [[families]]               # indexed coordinates theta0 ... theta{n-1} (first = 0)
+    name = "theta"
+    n = 8
+    first = 0
+
+    [[particles]]              # mass, position = [x, y(, z)], optional name and over
+    [[bodies]]                 # mass, inertia, position, attitude = "euler" | "quaternion" |
+                               # "mrp" | "planar", coordinates = [...], sequence = "321", name
+    [[forces]]                 # force = [...], at = [...]
+    [[generalized_forces]]     # coordinate, expr
+    [[torques]]                # torque = [...] (or one expression for a planar body), on, frame
+    [[springs]]                # k, between = [[...], [...]], rest_length
+    [[dampers]]                # c, between
+    [[constraints]]            # name, and holonomic = "f(q, t)" or velocity = "A(q) dot(q) + b"
+
+    [initial]
+    q = { theta1 = 1.0 }       # a family takes a list of n values, or one value for all
+    qd = { theta1 = 0.0 }
+
+    [simulate]
+    t_end = 10.0
+    method = "projection"
+
+A piece over a family has ``over = "k"`` (every k its references allow) or ``over = ["k", first,
+last]``; its expressions write members as ``theta[k]``, ``theta[k+1]``. ``dot(q)`` is the rate of
+coordinate q, ``t`` the time.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from pfaff.api.system import System
+from pfaff.core.errors import ModelError
+from pfaff.core.safe_expr import (
+    ExpressionError,
+    check_name,
+    parse_expression,
+    parse_number,
+)
+from pfaff.core.symbols import coordinates as make_coordinates
+from pfaff.core.symbols import t
+from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
+
+MAX_BYTES = 1 << 20  # 1 MB: a larger file is refused unless ``max_bytes`` is raised
+SECTIONS = {
+    "model", "families", "particles", "bodies", "forces", "generalized_forces", "torques",
+    "springs", "dampers", "constraints", "initial", "simulate",
+}  # fmt: skip
+SIMULATE_KEYS = {
+    "t_end": float, "method": str, "rtol": float, "atol": float, "integrator": str,
+    "max_step": float, "first_step": float, "alpha": float, "beta": float,
+    "constraint_tol": float, "initial_tol": float, "project_initial": bool,
+    "project_output": bool, "samples": int,
+}  # fmt: skip
+
+
+class ModelFileError(ModelError):
+    """A model file that cannot be read: the message names the file, the key and the problem."""
+
+
+@dataclass
+class ModelFile:
+    """A model file, read.
+
+    Attributes
+    ----------
+    path : Path
+    name : str
+    system : System
+    parameters : dict of str to float
+        The values of ``[model].parameters``, in the file's order.
+    q0, qd0 : ndarray, shape (n,)
+        ``[initial]`` in coordinate order (0 where not given).
+    simulate : dict
+        ``[simulate]``: run settings (``t_end``, ``method``, tolerances, ...).
+    constraint_names : list of str
+        In the file's order (the order of the multipliers).
+    """
+
+    path: Path
+    name: str
+    system: System
+    parameters: dict[str, float]
+    q0: np.ndarray
+    qd0: np.ndarray
+    simulate: dict[str, Any] = field(default_factory=dict)
+    constraint_names: list[str] = field(default_factory=list)
+
+    def compile(self, **parameters: float) -> Any:
+        """The numeric model with the file's parameter values (``parameters`` override them);
+        parameters the equations do not use (declared but unused) are left out."""
+        values = {**self.parameters, **parameters}
+        used = {s.name for s in self.system.parameters}
+        return self.system.equations().compile({k: v for k, v in values.items() if k in used})
+
+
+def load_model(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> ModelFile:
+    """Read a model file (TOML) into a :class:`ModelFile`; nothing in the file is executed.
+
+    Parameters
+    ----------
+    path : str or PathLike
+    max_bytes : int
+        Largest accepted file size (1 MB by default).
+
+    Raises
+    ------
+    ModelFileError
+        Naming the file, the key (and line, for TOML syntax) and the problem.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, pfaff
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "pendulum.toml"
+    >>> _ = p.write_text('''
+    ... [model]
+    ... coordinates = ["theta"]
+    ... parameters = { m = 1.0, l = 2.0, g = 9.81 }
+    ... potential = "-m*g*l*cos(theta)"
+    ... [[particles]]
+    ... mass = "m"
+    ... position = ["l*sin(theta)", "-l*cos(theta)"]
+    ... [initial]
+    ... q = { theta = 0.5 }
+    ... ''')
+    >>> mf = pfaff.load_model(p)
+    >>> mf.system.equations().mass_matrix, mf.q0.tolist()
+    (Matrix([[l**2*m]]), [0.5])
+    """
+    p = Path(path)
+    data = _read(p, max_bytes)
+    return _Loader(p, data).load()
+
+
+def _read(p: Path, max_bytes: int) -> dict:
+    where = f"file {p}"
+    try:
+        size = p.stat().st_size
+        if not p.is_file():
+            raise ModelFileError(f"{where}: not a regular file")
+        if size > max_bytes:
+            raise ModelFileError(
+                f"{where}: {size} bytes, above the cap of {max_bytes} (pass a larger `max_bytes`"
+                " to load_model, or --max-bytes, if the file is meant to be this large)"
+            )
+        with p.open("rb") as fh:
+            raw = fh.read(max_bytes + 1)
+    except OSError as e:
+        raise ModelFileError(f"{where}: cannot be read ({e.strerror or e})") from None
+    if len(raw) > max_bytes:
+        raise ModelFileError(f"{where}: larger than the cap of {max_bytes} bytes")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ModelFileError(f"{where}: not UTF-8 text (byte {e.start})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ModelFileError(f"{where}: not valid TOML: {e}") from None
+    except RecursionError:
+        raise ModelFileError(f"{where}: nested too deeply") from None
+
+
+class _Loader:
+    """One pass over the file's tables, building the System as it goes."""
+
+    def __init__(self, path: Path, data: dict) -> None:
+        self.path, self.data = path, data
+        self.names: dict[str, sp.Expr] = {"t": t}
+        self.families: dict[str, Any] = {}
+        self.bodies: dict[str, Any] = {}
+        self.constraints: list[str] = []
+
+    def where(self, key: str) -> str:
+        return f"file {self.path}, key {key}"
+
+    def fail(self, key: str, problem: str) -> ModelFileError:
+        return ModelFileError(f"{self.where(key)}: {problem}")
+
+    # ------------------------------------------------------------------ helpers
+    def table(self, key: str, value: object) -> dict:
+        if not isinstance(value, dict):
+            raise self.fail(key, f"must be a table, got {type(value).__name__}")
+        return value
+
+    def tables(self, key: str) -> list[dict]:
+        value = self.data.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.fail(key, f"must be an array of tables ([[{key}]])")
+        return value
+
+    def keys(
+        self, key: str, tab: dict, allowed: set[str], required: set[str] = frozenset()
+    ) -> None:
+        extra = sorted(set(tab) - allowed)
+        if extra:
+            raise self.fail(
+                key, f"unknown key(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})"
+            )
+        missing = sorted(required - set(tab))
+        if missing:
+            raise self.fail(key, f"missing key(s) {', '.join(missing)}")
+
+    def expr(self, key: str, value: object, *, index: sp.Symbol | None = None) -> sp.Expr:
+        if isinstance(value, bool):
+            raise self.fail(key, f"must be an expression or a number, got {value!r}")
+        if isinstance(value, int | float):
+            return (
+                sp.Integer(value)
+                if isinstance(value, int)
+                else sp.Float(parse_number(value, self.where(key)))
+            )
+        if not isinstance(value, str):
+            raise self.fail(
+                key, f"must be an expression (a string) or a number, got {type(value).__name__}"
+            )
+        names = dict(self.names)
+        subs = None
+        if index is not None:
+            names[index.name] = index
+            subs = {name: (lambda i, fam=fam: fam[i]) for name, fam in self.families.items()}
+        return parse_expression(value, names, where=self.where(key), subscripts=subs)
+
+    def exprs(
+        self, key: str, value: object, *, index: sp.Symbol | None = None, sizes=(2, 3)
+    ) -> list:
+        if not isinstance(value, list) or len(value) not in sizes:
+            raise self.fail(key, f"must be a list of {' or '.join(map(str, sizes))} expressions")
+        return [self.expr(f"{key}[{i}]", v, index=index) for i, v in enumerate(value)]
+
+    def over(self, key: str, tab: dict) -> tuple[object, sp.Symbol | None]:
+        if "over" not in tab:
+            return None, None
+        o = tab["over"]
+        if isinstance(o, str):
+            check_name(o, self.where(f"{key}.over"))
+            k = sp.Symbol(o)
+            return k, k
+        if (
+            isinstance(o, list)
+            and len(o) == 3
+            and isinstance(o[0], str)
+            and all(isinstance(v, int) and not isinstance(v, bool) for v in o[1:])
+        ):
+            check_name(o[0], self.where(f"{key}.over"))
+            k = sp.Symbol(o[0])
+            return (k, o[1], o[2]), k
+        raise self.fail(f"{key}.over", 'must be "k" or ["k", first, last] (whole numbers)')
+
+    def name_of(self, key: str, tab: dict) -> str | None:
+        name = tab.get("name")
+        if name is not None and not isinstance(name, str):
+            raise self.fail(f"{key}.name", "must be a string")
+        if name is not None and (len(name) > 200 or not name.isprintable()):
+            raise self.fail(f"{key}.name", "must be printable text of at most 200 characters")
+        return name
+
+    # ------------------------------------------------------------------ sections
+    def load(self) -> ModelFile:
+        unknown = sorted(set(self.data) - SECTIONS)
+        if unknown:
+            raise ModelFileError(
+                f"file {self.path}: unknown section(s) {', '.join(unknown)} "
+                f"(allowed: {', '.join(sorted(SECTIONS))})"
+            )
+        model = self.table("model", self.data.get("model", {}))
+        self.keys(
+            "model",
+            model,
+            {"name", "coordinates", "parameters", "kinetic", "potential", "dissipation"},
+        )
+        name = model.get("name", self.path.stem)
+        if not isinstance(name, str):
+            raise self.fail("model.name", "must be a string")
+        system = self.system(model, name)
+        values = self.parameters(model)
+        self.energies(system, model)
+        self.particles(system)
+        self.bodies_(system)
+        self.forces(system)
+        self.constraints_(system)
+        used = {s.name for s in system.parameters}
+        undeclared = sorted(used - set(values))
+        if undeclared:  # cannot happen through the parser; a guard against a future change
+            raise self.fail("model.parameters", f"no value for {', '.join(undeclared)}")
+        q0, qd0 = self.initial(system)
+        return ModelFile(
+            self.path, name, system, values, q0, qd0, self.simulate(), list(self.constraints)
+        )
+
+    def system(self, model: dict, name: str) -> System:
+        coords = model.get("coordinates", [])
+        if not isinstance(coords, list) or not all(isinstance(c, str) for c in coords):
+            raise self.fail("model.coordinates", "must be a list of names")
+        fams = self.tables("families")
+        if not coords and not fams:
+            raise self.fail("model.coordinates", "a model needs coordinates (or [[families]])")
+        for i, c in enumerate(coords):
+            check_name(c, self.where(f"model.coordinates[{i}]"))
+        if len(set(coords)) != len(coords):
+            raise self.fail("model.coordinates", "a coordinate is named twice")
+        qs = list(make_coordinates(" ".join(coords))) if coords else []
+        if len(coords) == 1:
+            qs = [make_coordinates(coords[0])]
+        system = System(qs, name=name) if qs else System(name=name)
+        self.names.update(zip(coords, qs, strict=True))
+        for i, fam in enumerate(fams):
+            key = f"families[{i}]"
+            self.keys(key, fam, {"name", "n", "first"}, {"name", "n"})
+            fname = fam["name"]
+            check_name(fname, self.where(f"{key}.name"))
+            if fname in self.names or fname in self.families:
+                raise self.fail(f"{key}.name", f"`{fname}` is declared twice")
+            for k in ("n", "first"):
+                v = fam.get(k, 0)
+                if not isinstance(v, int) or isinstance(v, bool):
+                    raise self.fail(f"{key}.{k}", "must be a whole number")
+            try:
+                f = system.add_family(fname, fam["n"], first=fam.get("first", 0))
+            except ModelError as e:
+                raise self.fail(key, str(e)) from None
+            self.families[fname] = f
+        return system
+
+    def parameters(self, model: dict) -> dict[str, float]:
+        params = self.table("model.parameters", model.get("parameters", {}))
+        values = {}
+        for k, v in params.items():
+            where = f"model.parameters.{k}"
+            check_name(k, self.where(where))
+            if k in self.names or k in self.families:
+                raise self.fail(where, f"`{k}` is already a coordinate, family or t")
+            values[k] = parse_number(v, self.where(where))
+            self.names[k] = sp.Symbol(k)
+        return values
+
+    def energies(self, system: System, model: dict) -> None:
+        for kind in ("kinetic", "potential", "dissipation"):
+            terms = model.get(kind, [])
+            terms = [terms] if isinstance(terms, str) else terms
+            if not isinstance(terms, list):
+                raise self.fail(f"model.{kind}", "must be an expression or a list of them")
+            for i, text in enumerate(terms):
+                key = f"model.{kind}" + (f"[{i}]" if len(terms) > 1 else "")
+                e = self.expr(key, text)
+                add = {
+                    "kinetic": system.add_kinetic_energy,
+                    "potential": system.add_potential_energy,
+                    "dissipation": system.add_dissipation,
+                }[kind]
+                self.call(key, add, e)
+
+    def call(self, key: str, fn: Any, *args: Any, **kw: Any) -> Any:
+        """A System method; its ModelError names this key of the file."""
+        try:
+            return fn(*args, **kw)
+        except (ModelError, ExpressionError) as e:
+            raise self.fail(key, str(e)) from None
+        except ValueError as e:  # any other value problem of the pieces (a ConstraintError)
+            raise self.fail(key, str(e)) from None
+
+    def particles(self, system: System) -> None:
+        for i, p in enumerate(self.tables("particles")):
+            key = f"particles[{i}]"
+            self.keys(key, p, {"mass", "position", "name", "over"}, {"mass", "position"})
+            over, k = self.over(key, p)
+            m = self.expr(f"{key}.mass", p["mass"], index=k)
+            r = self.exprs(f"{key}.position", p["position"], index=k)
+            self.call(key, system.add_particle, m, r, name=self.name_of(key, p), over=over)
+
+    def bodies_(self, system: System) -> None:
+        kinds = {"euler": EulerAngles, "quaternion": Quaternion, "mrp": MRP, "planar": PlanarAngle}
+        for i, b in enumerate(self.tables("bodies")):
+            key = f"bodies[{i}]"
+            allowed = {"mass", "inertia", "position", "attitude", "coordinates", "sequence", "name"}
+            self.keys(key, b, allowed, {"mass", "inertia", "position", "attitude", "coordinates"})
+            kind = b["attitude"]
+            if kind not in kinds:
+                raise self.fail(f"{key}.attitude", f"must be one of {', '.join(kinds)}")
+            names = b["coordinates"]
+            if not isinstance(names, list) or not all(isinstance(c, str) for c in names):
+                raise self.fail(f"{key}.coordinates", "must be a list of coordinate names")
+            qs = []
+            for c in names:
+                q = self.names.get(c)
+                if q is None or q.is_Symbol:
+                    raise self.fail(f"{key}.coordinates", f"`{c}` is not a declared coordinate")
+                qs.append(q)
+            try:
+                if kind == "euler":
+                    seq = b.get("sequence", "321")
+                    if not isinstance(seq, str):
+                        raise self.fail(f"{key}.sequence", 'must be a string such as "321"')
+                    att = EulerAngles(qs, seq)
+                else:
+                    att = kinds[kind](qs)
+            except ModelError as e:
+                raise self.fail(key, str(e)) from None
+            m = self.expr(f"{key}.mass", b["mass"])
+            inertia = self.inertia(f"{key}.inertia", b["inertia"])
+            r = self.exprs(f"{key}.position", b["position"])
+            body = self.call(key, system.add_rigid_body, m, inertia, r, att, self.name_of(key, b))
+            self.bodies[body.name] = body
+            if body.constraint:
+                self.constraints.append(body.constraint)
+
+    def inertia(self, key: str, value: object) -> object:
+        if isinstance(value, list) and value and all(isinstance(r, list) for r in value):
+            if len(value) != 3 or any(len(r) != 3 for r in value):
+                raise self.fail(key, "a matrix must be 3×3")
+            return sp.Matrix(
+                [
+                    [self.expr(f"{key}[{i}][{j}]", v) for j, v in enumerate(r)]
+                    for i, r in enumerate(value)
+                ]
+            )
+        if isinstance(value, list):
+            return self.exprs(key, value, sizes=(3,))
+        return self.expr(key, value)
+
+    def forces(self, system: System) -> None:
+        for i, f in enumerate(self.tables("forces")):
+            key = f"forces[{i}]"
+            self.keys(key, f, {"force", "at", "name", "over"}, {"force", "at"})
+            over, k = self.over(key, f)
+            F = self.exprs(f"{key}.force", f["force"], index=k)
+            at = self.exprs(f"{key}.at", f["at"], index=k)
+            self.call(key, system.add_force, F, at, name=self.name_of(key, f), over=over)
+        for i, g in enumerate(self.tables("generalized_forces")):
+            key = f"generalized_forces[{i}]"
+            self.keys(key, g, {"coordinate", "expr", "name"}, {"coordinate", "expr"})
+            c = g["coordinate"]
+            if not isinstance(c, str) or c not in self.names or self.names[c].is_Symbol:
+                raise self.fail(f"{key}.coordinate", f"`{c}` is not a declared coordinate")
+            e = self.expr(f"{key}.expr", g["expr"])
+            self.call(
+                key, system.add_generalized_force, self.names[c], e, name=self.name_of(key, g)
+            )
+        for i, tq in enumerate(self.tables("torques")):
+            key = f"torques[{i}]"
+            self.keys(key, tq, {"torque", "on", "frame", "name"}, {"torque", "on"})
+            body = self.bodies.get(tq["on"]) if isinstance(tq["on"], str) else None
+            if body is None:
+                raise self.fail(
+                    f"{key}.on",
+                    f"must name a body of the file ({', '.join(self.bodies) or 'none'})",
+                )
+            val = tq["torque"]
+            tau = (
+                self.exprs(f"{key}.torque", val, sizes=(3,))
+                if isinstance(val, list)
+                else self.expr(f"{key}.torque", val)
+            )
+            frame = tq.get("frame", "inertial")
+            self.call(key, system.add_torque, tau, on=body, frame=frame, name=self.name_of(key, tq))
+        for kind in ("springs", "dampers"):
+            for i, s in enumerate(self.tables(kind)):
+                key = f"{kind}[{i}]"
+                coef = "k" if kind == "springs" else "c"
+                allowed = {coef, "between", "name"} | (
+                    {"rest_length"} if kind == "springs" else set()
+                )
+                self.keys(key, s, allowed, {coef, "between"})
+                pts = s["between"]
+                if not isinstance(pts, list) or len(pts) != 2:
+                    raise self.fail(f"{key}.between", "must be two points [[...], [...]]")
+                p1, p2 = (self.exprs(f"{key}.between[{j}]", pts[j]) for j in range(2))
+                value = self.expr(f"{key}.{coef}", s[coef])
+                if kind == "springs":
+                    rest = self.expr(f"{key}.rest_length", s.get("rest_length", 0))
+                    self.call(
+                        key,
+                        system.add_spring,
+                        value,
+                        between=(p1, p2),
+                        rest_length=rest,
+                        name=self.name_of(key, s),
+                    )
+                else:
+                    self.call(
+                        key, system.add_damper, value, between=(p1, p2), name=self.name_of(key, s)
+                    )
+
+    def constraints_(self, system: System) -> None:
+        for i, c in enumerate(self.tables("constraints")):
+            key = f"constraints[{i}]"
+            self.keys(key, c, {"name", "holonomic", "velocity", "over"})
+            kinds = [k for k in ("holonomic", "velocity") if k in c]
+            if len(kinds) != 1:
+                raise self.fail(key, "needs exactly one of `holonomic` or `velocity`")
+            over, k = self.over(key, c)
+            e = self.expr(f"{key}.{kinds[0]}", c[kinds[0]], index=k)
+            name = self.name_of(key, c) or f"constraint{len(self.constraints) + 1}"
+            add = (
+                system.add_holonomic_constraint
+                if kinds[0] == "holonomic"
+                else system.add_velocity_constraint
+            )
+            self.call(key, add, e, name, over=over)
+            self.constraints.append(name)
+
+    def initial(self, system: System) -> tuple[np.ndarray, np.ndarray]:
+        init = self.table("initial", self.data.get("initial", {}))
+        self.keys("initial", init, {"q", "qd"})
+        out = []
+        index = {str(q.func): i for i, q in enumerate(system._ordinary)}
+        for part in ("q", "qd"):
+            vec = np.zeros(system.n)
+            values = self.table(f"initial.{part}", init.get(part, {}))
+            for name, v in values.items():
+                key = f"initial.{part}.{name}"
+                if name in index:
+                    vec[index[name]] = parse_number(v, self.where(key))
+                elif name in self.families:
+                    fam = self.families[name]
+                    seg = slice(fam.offset, fam.offset + fam.n)
+                    if isinstance(v, list):
+                        if len(v) != fam.n:
+                            raise self.fail(
+                                key, f"needs {fam.n} values (one per member), got {len(v)}"
+                            )
+                        vec[seg] = [
+                            parse_number(x, self.where(f"{key}[{j}]")) for j, x in enumerate(v)
+                        ]
+                    else:
+                        vec[seg] = parse_number(v, self.where(key))
+                else:
+                    raise self.fail(key, f"`{name}` is not a coordinate or family of the model")
+            out.append(vec)
+        return out[0], out[1]
+
+    def simulate(self) -> dict[str, Any]:
+        sim = self.table("simulate", self.data.get("simulate", {}))
+        self.keys("simulate", sim, set(SIMULATE_KEYS))
+        out: dict[str, Any] = {}
+        for k, v in sim.items():
+            kind = SIMULATE_KEYS[k]
+            key = f"simulate.{k}"
+            if kind is float:
+                out[k] = parse_number(v, self.where(key))
+                if k != "alpha" and k != "beta" and not out[k] > 0:
+                    raise self.fail(key, f"must be positive, got {out[k]}")
+            elif kind is bool:
+                if not isinstance(v, bool):
+                    raise self.fail(key, "must be true or false")
+                out[k] = v
+            elif kind is int:
+                if not isinstance(v, int) or isinstance(v, bool) or not 2 <= v <= 1_000_000:
+                    raise self.fail(key, "must be a whole number from 2 to 1000000")
+                out[k] = v
+            else:
+                if not isinstance(v, str) or len(v) > 40:
+                    raise self.fail(key, "must be a short string")
+                out[k] = v
+        if "t_end" in out and not math.isfinite(out["t_end"]):
+            raise self.fail("simulate.t_end", "must be finite")
+        return out
