@@ -102,6 +102,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _simulation_options(pend)
     _body_demos(dsub)
+    from pfaff.cli.filecmd import add_parsers  # `pfaff equations` and `pfaff run` on a file
+
+    add_parsers(sub, _debug_option)
     return p
 
 
@@ -367,10 +370,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     debug = bool(getattr(args, "debug", False))
-    if args.command is None or args.demo is None:  # bare `pfaff` or `pfaff demo`: the help
-        args.show_help()
+    if args.command is None or (args.command == "demo" and args.demo is None):
+        args.show_help()  # bare `pfaff` or `pfaff demo`: the help
         return 0
     try:
+        if args.command in ("equations", "run"):
+            from pfaff.cli.filecmd import run_equations, run_model
+
+            check_files(args)
+            if getattr(args, "animate", None):
+                _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
+            return run_equations(args) if args.command == "equations" else run_model(args)
         if args.demo in ("tumble", "top", "disk"):
             check_files(args)
             return run_body_demo(args)

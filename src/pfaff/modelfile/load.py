@@ -49,6 +49,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -188,6 +189,31 @@ def _read(p: Path, max_bytes: int) -> dict:
         raise ModelFileError(f"{where}: nested too deeply") from None
 
 
+class _Names(Mapping):
+    """The names an expression may use: the declared ones, and family members (``theta5``)
+    resolved on demand (a family of 2^24 members is not listed)."""
+
+    def __init__(self, declared: dict, families: dict) -> None:
+        self.declared, self.families = declared, families
+
+    def __getitem__(self, key: str) -> sp.Expr:
+        if key in self.declared:
+            return self.declared[key]
+        for name, fam in self.families.items():
+            rest = key[len(name) :]
+            if key.startswith(name) and rest.isdigit() and (rest == "0" or rest[0] != "0"):
+                i = int(rest)
+                if fam.first <= i <= fam.last:
+                    return fam[i]
+        raise KeyError(key)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.declared)
+
+    def __len__(self) -> int:
+        return len(self.declared)
+
+
 class _Loader:
     """One pass over the file's tables, building the System as it goes."""
 
@@ -241,10 +267,10 @@ class _Loader:
             raise self.fail(
                 key, f"must be an expression (a string) or a number, got {type(value).__name__}"
             )
-        names = dict(self.names)
+        names: Mapping = _Names(dict(self.names), self.families)
         subs = None
         if index is not None:
-            names[index.name] = index
+            names.declared[index.name] = index
             subs = {name: (lambda i, fam=fam: fam[i]) for name, fam in self.families.items()}
         return parse_expression(value, names, where=self.where(key), subscripts=subs)
 
@@ -326,9 +352,8 @@ class _Loader:
             check_name(c, self.where(f"model.coordinates[{i}]"))
         if len(set(coords)) != len(coords):
             raise self.fail("model.coordinates", "a coordinate is named twice")
-        qs = list(make_coordinates(" ".join(coords))) if coords else []
-        if len(coords) == 1:
-            qs = [make_coordinates(coords[0])]
+        made = make_coordinates(" ".join(coords)) if coords else ()
+        qs = [made] if len(coords) == 1 else list(made)
         system = System(qs, name=name) if qs else System(name=name)
         self.names.update(zip(coords, qs, strict=True))
         for i, fam in enumerate(fams):

@@ -1,0 +1,199 @@
+"""``pfaff equations MODEL.toml`` and ``pfaff run MODEL.toml``: the CLI on a model file."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any
+
+import numpy as np
+
+RUN_FLAGS = ("t_end", "method", "rtol", "atol")
+
+
+def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
+    """The ``equations`` and ``run`` subcommands; ``common(p)`` adds the shared options."""
+    from pfaff.integrate.simulation import METHODS
+
+    eq = sub.add_parser("equations", help="derive and print the equations of a model file")
+    eq.add_argument("model", metavar="MODEL.toml", help="the model file")
+    eq.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
+    eq.add_argument("--json", action="store_true", help="print one JSON object")
+    eq.add_argument("--max-bytes", type=int, default=None, help="raise the 1 MB file-size cap")
+    common(eq)
+    run = sub.add_parser("run", help="simulate a model file")
+    run.add_argument("model", metavar="MODEL.toml", help="the model file")
+    run.add_argument("--t-end", type=float, help="end time (default: the file's [simulate])")
+    run.add_argument("--method", choices=list(METHODS), help="integrator (default: the file's)")
+    run.add_argument("--rtol", type=float, help="relative tolerance")
+    run.add_argument("--atol", type=float, help="absolute tolerance")
+    run.add_argument("--samples", type=int, help="report this many equally spaced times")
+    run.add_argument("--output", metavar="run.nc|run.csv", help="write the trajectory")
+    run.add_argument("--plot", metavar="run.png", help="write a figure of the run")
+    run.add_argument("--animate", metavar="run.gif", help="write an animation of the run")
+    run.add_argument("--frames", type=int, default=200, help="animation frames (default 200)")
+    run.add_argument("--json", action="store_true", help="print one JSON object")
+    run.add_argument("--max-bytes", type=int, default=None, help="raise the 1 MB file-size cap")
+    common(run)
+
+
+def _load(args: argparse.Namespace) -> Any:
+    from pfaff.modelfile import load_model
+
+    kw = {} if args.max_bytes is None else {"max_bytes": args.max_bytes}
+    return load_model(args.model, **kw)
+
+
+def run_equations(args: argparse.Namespace) -> int:
+    """Print M, Q − h, A, b, the Lagrange equations and the work table of a model file."""
+    from pfaff.modelfile.printer import file_syntax, matrix_syntax
+
+    mf = _load(args)
+    eom = mf.system.equations()
+    coords = list(eom.coordinates)
+    lagrange = [
+        f"{file_syntax(e.lhs, coords)} = {file_syntax(e.rhs, coords)}"
+        for e in eom.lagrange_equations
+    ]
+    work = []
+    if mf.system.n <= 60:
+        for w in mf.system.work():
+            does = w.does_work()
+            work.append(
+                {
+                    "name": w.name,
+                    "generalized_force": [file_syntax(e, coords) for e in w.generalized_force],
+                    "virtual_power": file_syntax(w.virtual_power, coords),
+                    "does_work": does,
+                }
+            )
+    rep = {
+        "model": mf.name,
+        "coordinates": [str(q.func) for q in coords],
+        "parameters": mf.parameters,
+        "mass_matrix": matrix_syntax(eom.mass_matrix, coords),
+        "forcing": [file_syntax(e, coords) for e in eom.forcing],
+        "constraint_matrix": matrix_syntax(eom.constraint_matrix, coords),
+        "constraint_bias": [file_syntax(e, coords) for e in eom.constraint_bias],
+        "constraint_names": list(eom.constraint_names),
+        "multipliers": [str(s) for s in eom.multipliers],
+        "lagrange_equations": lagrange,
+        "work": work,
+    }
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    elif args.latex:
+        print(eom.latex())
+    else:
+        print(_text(rep))
+    return 0
+
+
+def _text(rep: dict) -> str:
+    lines = [f"{rep['model']}: q = ({', '.join(rep['coordinates'])})", "", "M ="]
+    lines += [f"  [{', '.join(row)}]" for row in rep["mass_matrix"]]
+    lines += ["", "Q − h ="] + [f"  {e}" for e in rep["forcing"]]
+    if rep["multipliers"]:
+        lines += ["", "A ="] + [f"  [{', '.join(row)}]" for row in rep["constraint_matrix"]]
+        lines += ["", "b ="] + [f"  {e}" for e in rep["constraint_bias"]]
+        pairs = zip(rep["multipliers"], rep["constraint_names"], strict=True)
+        lines += ["", "multipliers: " + ", ".join(f"{m} ({c})" for m, c in pairs)]
+    lines += ["", "Lagrange's equations:"] + [f"  {e}" for e in rep["lagrange_equations"]]
+    if rep["work"]:
+        lines += ["", "Work of the applied forces:"]
+        for w in rep["work"]:
+            verdict = {True: "does work", False: "does no work", None: "undecided"}[w["does_work"]]
+            lines.append(f"  {w['name']}: virtual power {w['virtual_power']} — {verdict}")
+    return "\n".join(lines)
+
+
+def run_model(args: argparse.Namespace) -> int:
+    """Simulate a model file with its settings, flags overriding them; exit 3 on failure."""
+    from pfaff.core.errors import OptionError
+    from pfaff.integrate.simulation import simulate
+
+    mf = _load(args)
+    settings = dict(mf.simulate)
+    for key in RUN_FLAGS:
+        if getattr(args, key) is not None:
+            settings[key] = getattr(args, key)
+    if args.samples is not None:
+        settings["samples"] = args.samples
+    t_end = settings.pop("t_end", None)
+    if t_end is None:
+        raise OptionError(f"{args.model}: no end time: give --t-end or [simulate] t_end")
+    samples = settings.pop("samples", None)
+    if args.animate and args.frames < 1:
+        raise OptionError("--frames must be at least 1")
+    model = mf.compile()
+    t_eval = np.linspace(0.0, t_end, samples) if samples else None
+    start = time.perf_counter()
+    traj = simulate(model, mf.q0, mf.qd0, (0.0, t_end), t_eval=t_eval, **settings)
+    wall = time.perf_counter() - start
+    rep = _run_report(mf, traj, wall)
+    if args.output:
+        suffix = args.output.rsplit(".", 1)[-1].lower()
+        (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
+        rep["output"] = args.output
+    if args.plot:
+        traj.plot(args.plot)
+        rep["plot"] = args.plot
+    if args.animate:
+        traj.animate(args.animate, frames=args.frames)
+        rep["animate"] = args.animate
+    if args.json:
+        print(json.dumps(rep, indent=1))
+    else:
+        print(_run_text(rep))
+    return 0 if traj.status == "success" else 3
+
+
+def _run_report(mf: Any, traj: Any, wall: float) -> dict:
+    k = len(traj.t)
+    res = np.abs(traj.constraint_residual)
+    return {
+        "model": mf.name,
+        "method": traj.method,
+        "status": traj.status,
+        "message": traj.message,
+        "t_end": float(traj.t[-1]) if k else None,
+        "points": k,
+        "coordinates": list(traj.coordinate_names),
+        "q_final": traj.q[-1].tolist() if k else None,
+        "qd_final": traj.qd[-1].tolist() if k else None,
+        "multipliers_final": traj.multipliers[-1].tolist() if k else None,
+        "multiplier_names": list(traj.multiplier_names),
+        "energy_initial": float(traj.energy[0]) if k else None,
+        "energy_final": float(traj.energy[-1]) if k else None,
+        "nc_work": float(traj.nc_work[-1]) if k else None,
+        "energy_balance_error": float(np.abs(traj.energy_balance).max()) if k else None,
+        "max_constraint_residual": float(res.max(initial=0.0)),
+        "stats": {
+            key: (int(v) if isinstance(v, int | np.integer) else v)
+            for key, v in traj.stats.items()
+            if v is not None
+        },
+        "wall_time_s": wall,
+    }
+
+
+def _run_text(rep: dict) -> str:
+    lines = [
+        f"{rep['model']}: {rep['method']} to t = {rep['t_end']} — {rep['status']} ({rep['message']})"
+    ]
+    if rep["q_final"] is not None:
+        pairs = zip(rep["coordinates"], rep["q_final"], strict=True)
+        lines.append("  q(t_end): " + ", ".join(f"{n} = {v:.10g}" for n, v in pairs))
+        lines.append(
+            f"  energy {rep['energy_initial']:.10g} -> {rep['energy_final']:.10g}, work of the "
+            f"applied forces {rep['nc_work']:.6g}, energy balance error "
+            f"{rep['energy_balance_error']:.2e}, max constraint residual "
+            f"{rep['max_constraint_residual']:.2e}"
+        )
+    s = rep["stats"]
+    lines.append("  " + ", ".join(f"{k} {v}" for k, v in s.items() if isinstance(v, int)))
+    for key in ("output", "plot", "animate"):
+        if key in rep:
+            lines.append(f"Wrote {rep[key]}")
+    return "\n".join(lines)
