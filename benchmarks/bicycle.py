@@ -13,7 +13,7 @@ the frame, the frame's pitch θ_B, steer δ and the front wheel's rotation θ_F 
 four nonholonomic no-slip constraints (both contact points, in the ground plane) and one holonomic
 one (the front wheel touches the ground), so three degrees of freedom at the velocity level.
 
-:func:`whipple_bicycle` builds it in pfaff: the kinetic energy of each body from
+:func:`pfaff.models.whipple_bicycle` (imported here as :func:`whipple_bicycle`) builds it in pfaff: the kinetic energy of each body from
 ``sympy.physics.mechanics`` frames and points (an expression in q and q̇), gravity as a potential,
 the contact constraints with ``add_velocity_constraint`` / ``add_holonomic_constraint``.
 :func:`kane_bicycle` builds the same bicycle from the same kinematics the standard way with
@@ -39,7 +39,6 @@ difference of q̈ between pfaff and Kane at three random states that satisfy the
 from __future__ import annotations
 
 import argparse
-import functools
 import gc
 import json
 import os
@@ -51,176 +50,47 @@ import timeit
 import numpy as np
 import sympy as sp
 import sympy.physics.mechanics as me
-from scipy.optimize import brentq
 from sympy.core.cache import clear_cache
 
 import pfaff
-from pfaff import System, coordinates
 
-COORDINATES = "x y psi phi thetaR thetaB delta thetaF"
-"""Names of the eight coordinates of :func:`whipple_bicycle`, in order."""
+# The model, its benchmark values and the published linearized equations live in the zoo.
+from pfaff.models.bicycle import (
+    COORDINATES,
+    MEIJAARD,
+    MEIJAARD_C1,
+    MEIJAARD_CAPSIZE_SPEED,
+    MEIJAARD_K0,
+    MEIJAARD_K2,
+    MEIJAARD_M,
+    MEIJAARD_WEAVE_SPEED,
+    bicycle_kinematics,
+    bicycle_state,
+    meijaard_lean_steer,
+    whipple_bicycle,
+)
 
-MEIJAARD = {
-    "w": 1.02,  # wheelbase
-    "c": 0.08,  # trail
-    "lam": float(np.pi / 10),  # steer axis tilt
-    "g": 9.81,
-    "rR": 0.3,  # rear wheel radius, mass, inertia (axial: yy)
-    "mR": 2.0,
-    "IRxx": 0.0603,
-    "IRyy": 0.12,
-    "xB": 0.3,  # rear frame and rider: mass centre (x, z) in the upright reference, mass, inertia
-    "zB": -0.9,
-    "mB": 85.0,
-    "IBxx": 9.2,
-    "IByy": 11.0,
-    "IBzz": 2.8,
-    "IBxz": 2.4,
-    "xH": 0.9,  # front fork and handlebar
-    "zH": -0.7,
-    "mH": 4.0,
-    "IHxx": 0.05892,
-    "IHyy": 0.06,
-    "IHzz": 0.00708,
-    "IHxz": -0.00756,
-    "rF": 0.35,  # front wheel
-    "mF": 3.0,
-    "IFxx": 0.1405,
-    "IFyy": 0.28,
-}
-"""The benchmark parameters of Meijaard et al. (2007), Table 1 (SI units, z down)."""
-
-# The linearized lean and steer equations M ẍ + v C1 ẋ + (g K0 + v² K2) x = 0, x = (φ, δ), of the
-# benchmark bicycle as published by Meijaard et al. (2007), with its weave and capsize speeds.
-MEIJAARD_M = [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]]
-MEIJAARD_C1 = [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]]
-MEIJAARD_K0 = [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]]
-MEIJAARD_K2 = [[0.0, 76.59734589573222], [0.0, 2.65431523794604]]
-MEIJAARD_WEAVE_SPEED = 4.29238253634111
-MEIJAARD_CAPSIZE_SPEED = 6.02426201538837
+__all__ = [
+    "COORDINATES",
+    "MEIJAARD",
+    "MEIJAARD_C1",
+    "MEIJAARD_CAPSIZE_SPEED",
+    "MEIJAARD_K0",
+    "MEIJAARD_K2",
+    "MEIJAARD_M",
+    "MEIJAARD_WEAVE_SPEED",
+    "bicycle_kinematics",
+    "bicycle_state",
+    "kane_accelerations",
+    "kane_bicycle",
+    "lean_steer_matrix",
+    "meijaard_lean_steer",
+    "random_state",
+    "whipple_bicycle",
+]
 
 
-# --------------------------------------------------------------------------- the model
-def bicycle_kinematics(q: list, rates: list) -> dict:
-    """Frames, points, bodies and contact conditions of the Whipple bicycle.
-
-    ``q`` are the eight coordinates (order :data:`COORDINATES`), ``rates`` their time
-    derivatives: either ``q̇`` (pfaff) or generalized speeds ``u`` (Kane). Parameters are the
-    plain symbols named as in :data:`MEIJAARD`. Axes as in Meijaard et al.: x forward, y right,
-    z down; in the upright reference configuration (all angles 0) every body frame coincides with
-    the inertial one, so the published inertia components are entered as they are.
-
-    Returns a dict: ``N`` (inertial frame), ``Y`` (yaw frame), ``P`` (rear contact point),
-    ``bodies`` (RigidBody: rear wheel, frame, fork, front wheel), ``holonomic`` (z, down, of the
-    front contact point: 0), ``v_rear``, ``v_front`` (velocity of each wheel's material point at
-    its contact: 0) and ``g``.
-    """
-    p = {name: sp.Symbol(name) for name in MEIJAARD}
-    _, _, psi, phi, th_r, th_b, delta, th_f = q
-    u_x, u_y, u_psi, u_phi, u_th_r, u_th_b, u_delta, u_th_f = rates
-    lam, w, c, r_r, r_f = p["lam"], p["w"], p["c"], p["rR"], p["rF"]
-    N, Y, R, B, H, WR, WF = (me.ReferenceFrame(s) for s in ("N", "Y", "R", "B", "H", "WR", "WF"))
-    Y.orient_axis(N, N.z, psi)  # yaw
-    R.orient_axis(Y, Y.x, phi)  # lean
-    B.orient_axis(R, R.y, th_b)  # pitch: the rear frame
-    H.orient_body_fixed(B, (lam, delta, -lam), "YZY")  # steer about the tilted axis
-    WR.orient_axis(B, B.y, th_r)
-    WF.orient_axis(H, H.y, th_f)
-    Y.set_ang_vel(N, u_psi * N.z)
-    R.set_ang_vel(Y, u_phi * Y.x)
-    B.set_ang_vel(R, u_th_b * R.y)
-    H.set_ang_vel(B, u_delta * (sp.sin(lam) * B.x + sp.cos(lam) * B.z))
-    WR.set_ang_vel(B, u_th_r * B.y)
-    WF.set_ang_vel(H, u_th_f * H.y)
-
-    P = me.Point("P")  # rear contact
-    P.set_vel(N, u_x * N.x + u_y * N.y)
-    rear = P.locatenew("rear hub", -r_r * R.z)
-    rear.v2pt_theory(P, N, R)
-    frame_mc = rear.locatenew("frame mc", p["xB"] * B.x + (p["zB"] + r_r) * B.z)
-    frame_mc.v2pt_theory(rear, N, B)
-    steer = rear.locatenew("steer axis at the ground", (w + c) * B.x + r_r * B.z)
-    steer.v2pt_theory(rear, N, B)
-    fork_mc = steer.locatenew("fork mc", (p["xH"] - w - c) * H.x + p["zH"] * H.z)
-    fork_mc.v2pt_theory(steer, N, H)
-    front = steer.locatenew("front hub", -c * H.x - r_f * H.z)
-    front.v2pt_theory(steer, N, H)
-
-    # The front contact is the wheel's lowest point: from the hub, r_F along the unit vector in the
-    # wheel plane closest to straight down, (z - (z·n) n)/√(1 - (z·n)²) with n the wheel axis.
-    zn = me.dot(Y.z, H.y)
-    root = sp.sqrt(1 - zn**2)
-    down = (Y.z - zn * H.y) / root
-    holonomic = me.dot(front.pos_from(P), Y.z) + r_f * root
-    v_rear = rear.vel(N) + me.cross(WR.ang_vel_in(N), r_r * R.z)
-    v_front = front.vel(N) + me.cross(WF.ang_vel_in(N), r_f * down)
-
-    def wheel_inertia(frame: me.ReferenceFrame, axial: str, radial: str) -> me.Dyadic:
-        return me.inertia(frame, p[radial], p[axial], p[radial])  # symmetric about frame.y
-
-    bodies = [
-        me.RigidBody("rear wheel", rear, WR, p["mR"], (wheel_inertia(B, "IRyy", "IRxx"), rear)),
-        me.RigidBody(
-            "frame",
-            frame_mc,
-            B,
-            p["mB"],
-            (me.inertia(B, p["IBxx"], p["IByy"], p["IBzz"], 0, 0, p["IBxz"]), frame_mc),
-        ),
-        me.RigidBody(
-            "fork",
-            fork_mc,
-            H,
-            p["mH"],
-            (me.inertia(H, p["IHxx"], p["IHyy"], p["IHzz"], 0, 0, p["IHxz"]), fork_mc),
-        ),
-        me.RigidBody("front wheel", front, WF, p["mF"], (wheel_inertia(H, "IFyy", "IFxx"), front)),
-    ]
-    return {
-        "N": N,
-        "Y": Y,
-        "P": P,
-        "bodies": bodies,
-        "holonomic": holonomic,
-        "v_rear": v_rear,
-        "v_front": v_front,
-        "g": p["g"],
-    }
-
-
-def whipple_bicycle() -> System:
-    """The Whipple bicycle in pfaff: 8 coordinates, 4 no-slip and 1 contact constraint.
-
-    Coordinates ``x y psi phi thetaR thetaB delta thetaF`` (:data:`COORDINATES`), parameters the
-    symbols of :data:`MEIJAARD` (compile with those values for the benchmark bicycle).
-    Constraints, in order: ``front contact`` (holonomic), ``rear no slip x``, ``rear no slip y``,
-    ``front no slip x``, ``front no slip y`` (components along the yaw frame's x and y).
-
-    Examples
-    --------
-    >>> s = whipple_bicycle()
-    >>> s.n, len(s.parameters)
-    (8, 26)
-    """
-    q = coordinates(COORDINATES)
-    kin = bicycle_kinematics(q, [qi.diff(me.dynamicsymbols._t) for qi in q])  # t of pfaff
-    N, Y, P = kin["N"], kin["Y"], kin["P"]
-    bike = System(list(q), name="Whipple bicycle")
-    for body in kin["bodies"]:
-        bike.add_kinetic_energy(body.kinetic_energy(N), name=body.name)
-    height = [me.dot(b.masscenter.pos_from(P), Y.z) for b in kin["bodies"]]  # z is down
-    bike.add_potential_energy(
-        -kin["g"] * sum(b.mass * h for b, h in zip(kin["bodies"], height, strict=True)),
-        name="gravity",
-    )
-    bike.add_holonomic_constraint(kin["holonomic"], name="front contact")
-    for wheel in ("rear", "front"):
-        v = kin[f"v_{wheel}"]
-        bike.add_velocity_constraint(me.dot(v, Y.x), name=f"{wheel} no slip x")
-        bike.add_velocity_constraint(me.dot(v, Y.y), name=f"{wheel} no slip y")
-    return bike
-
-
+# --------------------------------------------------------------------------- Kane
 def kane_bicycle() -> tuple[me.KanesMethod, list, list]:
     """The same bicycle with SymPy's ``KanesMethod``: u = q̇, θ_B and five speeds dependent.
 
@@ -283,71 +153,7 @@ def kane_accelerations(kane: me.KanesMethod, q: list, u: list, values: dict):
     return rhs
 
 
-# --------------------------------------------------------------------------- consistent states
-@functools.cache
-def _constraint_functions() -> tuple:
-    """Lambdified front contact height f(q, params) and the 5 x 8 matrix of all constraint rows
-    (∂f/∂q, then the four no-slip rows) at (q, params), from the kinematics alone (not pfaff)."""
-    q = coordinates(COORDINATES)
-    qd = [qi.diff(me.dynamicsymbols._t) for qi in q]
-    kin = bicycle_kinematics(q, qd)
-    Y = kin["Y"]
-    qs = sp.symbols("q0:8")
-    us = sp.symbols("u0:8")
-    rep = {**dict(zip(qd, us, strict=True)), **dict(zip(q, qs, strict=True))}
-    rows = [
-        me.dot(kin["v_rear"], Y.x),
-        me.dot(kin["v_rear"], Y.y),
-        me.dot(kin["v_front"], Y.x),
-        me.dot(kin["v_front"], Y.y),
-    ]
-    f = kin["holonomic"].xreplace(rep)
-    slip = sp.Matrix([r.xreplace(rep) for r in rows])
-    A = sp.Matrix([f]).jacobian(qs).col_join(slip.jacobian(us))
-    params = [sp.Symbol(s) for s in MEIJAARD]
-    return (
-        sp.lambdify([qs, params], f, modules="numpy", cse=True),
-        sp.lambdify([qs, params], A, modules="numpy", cse=True),
-    )
-
-
-def bicycle_state(
-    values: dict,
-    *,
-    phi: float = 0.0,
-    delta: float = 0.0,
-    phi_dot: float = 0.0,
-    delta_dot: float = 0.0,
-    speed: float = 0.0,
-    x: float = 0.0,
-    y: float = 0.0,
-    psi: float = 0.0,
-    theta_r: float = 0.0,
-    theta_f: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """A state (q, q̇) of :func:`whipple_bicycle` that satisfies all five constraints.
-
-    The pitch θ_B solves the contact condition (``scipy.optimize.brentq``, near 0); the rates of x,
-    y, ψ, θ_B and θ_F solve the velocity constraints given φ̇, δ̇ and θ̇_R = -speed / r_R (``speed``
-    is the rear hub's forward speed when the frame does not pitch).
-    """
-    f, A = _constraint_functions()
-    p = [float(values[s]) for s in MEIJAARD]
-    q = np.array([x, y, psi, phi, theta_r, 0.0, delta, theta_f], dtype=float)
-
-    def height(pitch: float) -> float:
-        q[5] = pitch
-        return float(f(q, p))
-
-    q[5] = brentq(height, -0.5, 0.5, xtol=1e-15, rtol=4 * np.finfo(float).eps)
-    ind, dep = [3, 4, 6], [0, 1, 2, 5, 7]
-    qd = np.zeros(8)
-    qd[ind] = phi_dot, -speed / float(values["rR"]), delta_dot
-    Aq = np.asarray(A(q, p), dtype=float)
-    qd[dep] = np.linalg.solve(Aq[:, dep], -Aq[:, ind] @ qd[ind])
-    return q, qd
-
-
+# --------------------------------------------------------------------------- states
 def random_state(values: dict, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """A random consistent state: leaning, steered, rolling forward at 1 to 5 m/s."""
     return bicycle_state(
@@ -378,12 +184,6 @@ def lean_steer_matrix(accelerations, values: dict, speed: float, h: float = 1e-5
         minus = accelerations(*bicycle_state(values, speed=speed, **{name: -h}))
         J[:, j] = (plus[[3, 6]] - minus[[3, 6]]) / (2 * h)
     return J
-
-
-def meijaard_lean_steer(speed: float, g: float = MEIJAARD["g"]) -> np.ndarray:
-    """-M⁻¹ [g K0 + v² K2, v C1] from the published benchmark matrices."""
-    M, C1, K0, K2 = (np.array(a) for a in (MEIJAARD_M, MEIJAARD_C1, MEIJAARD_K0, MEIJAARD_K2))
-    return -np.linalg.solve(M, np.hstack([g * K0 + speed**2 * K2, speed * C1]))
 
 
 # --------------------------------------------------------------------------- measurements

@@ -6,6 +6,8 @@ from pfaff.core.errors import ModelError, OptionError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.equations import Derivation, Solution
+from pfaff.derive.linearize import linearize as _linearize
+from pfaff.numeric.linearization import Linearization
 from pfaff.numeric.model import SOLVERS as GENERAL_SOLVERS
 from pfaff.numeric.model import NumericModel
 from pfaff.numeric.structured import SOLVERS as STRUCTURED_SOLVERS
@@ -99,3 +101,69 @@ class EquationsOfMotion(Derivation):
         if self.family:
             return compile_structured(self, parameters or {}, solver=solver)
         return compile_equations(self, parameters or {}, solver=solver)
+
+    def linearize(
+        self,
+        op_point: dict,
+        independent: object,
+        independent_speeds: object = None,
+        inputs: object = (),
+    ) -> Linearization:
+        """Linearize about an equilibrium or a steady motion: ẋ = A x + B u, δλ = C x + D u.
+
+        The state is x = (δ of the ``independent`` coordinates, δ of the ``independent_speeds``
+        rates); the other coordinates are eliminated through the holonomic constraints' Jacobian
+        and the other rates through every constraint (holonomic and velocity), at the operating
+        point. Derivatives are exact (symbolic).
+
+        Parameters
+        ----------
+        op_point : dict
+            Values keyed by coordinate (or its name), rate (``q.diff(pfaff.t)``), parameter (Symbol
+            or name), input, and :data:`pfaff.t` (default 0). Every coordinate is required; a
+            parameter left out stays symbolic; an input left out is 0; a rate left out is 0,
+            except a dependent one (not kept), which the velocity constraints give. A steady
+            motion is given by all its rates.
+        independent : sequence of coordinates (or names)
+            The coordinates kept in the state, in this order.
+        independent_speeds : sequence of rates or coordinates (or names), optional
+            The rates kept in the state; default: those of ``independent``.
+        inputs : sequence, optional
+            Parameters (Symbols or names) or functions of time (``F(t)``) whose columns B has.
+
+        Returns
+        -------
+        Linearization
+            ``A``, ``B`` (NumPy arrays when every value is numeric, else SymPy matrices),
+            ``states``, ``inputs``, ``multipliers`` = (C, D), ``eigenvalues()``, ``modes()``,
+            ``is_stable()``.
+
+        Raises
+        ------
+        ConstraintError
+            The point violates a constraint, or the kept coordinates (rates) leave the others
+            undetermined (a count that does not match, a singular Jacobian block).
+        StateError
+            The point is not an equilibrium or steady motion: a kept rate accelerates, or a kept
+            coordinate moves while the equations depend on it.
+        ModelError
+            A name that is not the model's, a coordinate named twice, a coordinate left out.
+
+        Examples
+        --------
+        The pendulum hanging down, then upright, with symbolic parameters:
+
+        >>> import pfaff, sympy as sp
+        >>> eom = pfaff.models.pendulum().equations()
+        >>> th = eom.coordinates[0]
+        >>> eom.linearize({th: 0}, [th]).A
+        Matrix([
+        [   0, 1],
+        [-g/L, 0]])
+        >>> lin = eom.linearize({th: sp.pi, "m": 1, "g": 9.81, "L": 1}, [th])
+        >>> lin.eigenvalues().real.round(4)
+        array([-3.1321,  3.1321])
+        >>> lin.is_stable()
+        False
+        """
+        return _linearize(self, op_point, independent, independent_speeds, inputs)

@@ -267,6 +267,11 @@ def n_link_pendulum_on_cart(n: int) -> System:
     return s
 
 
+from pfaff.models.bicycle import (  # noqa: E402, F401  (the Whipple bicycle)
+    MEIJAARD,
+    bicycle_operating_point,
+    whipple_bicycle,
+)
 from pfaff.models.bodies import (  # noqa: E402, F401  (the rigid-body zoo)
     heavy_top,
     rolling_disk,
