@@ -8,6 +8,94 @@ import numpy as np
 import sympy as sp
 
 
+class LazyEntries(dict):
+    """A template's entries as SymPy, converted from their SymEngine forms on first use.
+
+    ``raw`` holds the entries as SymEngine made them; ``convert(raw_entry)`` gives the SymPy
+    entry (tidied) or 0 (then dropped). Nothing on the way from a small system to numbers reads
+    them (its fused kernel is generated from ``raw``): on the Whipple bicycle the conversion was
+    two thirds of ``equations()``. Any read (``[]``, ``len``, iteration, ``dict(...)``) converts
+    them all once; ``raw_keys()`` is the pattern without converting (it may hold entries that
+    only the SymPy clean-up finds to be zero).
+    """
+
+    def __init__(self, raw: dict, convert: object) -> None:
+        super().__init__()
+        self.raw, self._convert = raw, convert
+        self._done = False
+
+    def _materialize(self) -> None:
+        if not self._done:
+            self._done = True
+            for key, e in self.raw.items():
+                v = self._convert(e)
+                if v != 0:
+                    dict.__setitem__(self, key, v)
+
+    def raw_keys(self) -> list:
+        """The keys of the raw entries (a superset of the converted keys)."""
+        return list(self.raw) if not self._done else list(dict.keys(self))
+
+    def __getitem__(self, key: object) -> object:
+        self._materialize()
+        return dict.__getitem__(self, key)
+
+    def __setitem__(self, key: object, value: object) -> None:
+        self._materialize()
+        dict.__setitem__(self, key, value)
+
+    def __iter__(self):  # type: ignore[override]
+        self._materialize()
+        return dict.__iter__(self)
+
+    def __len__(self) -> int:
+        self._materialize()
+        return dict.__len__(self)
+
+    def __contains__(self, key: object) -> bool:
+        self._materialize()
+        return dict.__contains__(self, key)
+
+    def __eq__(self, other: object) -> bool:
+        self._materialize()
+        return dict.__eq__(self, other)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        self._materialize()
+        return dict.__repr__(self)
+
+    def keys(self):  # type: ignore[override]
+        self._materialize()
+        return dict.keys(self)
+
+    def values(self):  # type: ignore[override]
+        self._materialize()
+        return dict.values(self)
+
+    def items(self):  # type: ignore[override]
+        self._materialize()
+        return dict.items(self)
+
+    def get(self, key: object, default: object = None) -> object:
+        self._materialize()
+        return dict.get(self, key, default)
+
+    def copy(self) -> dict:
+        self._materialize()
+        return dict(dict.items(self))
+
+    def pop(self, *args: object) -> object:
+        self._materialize()
+        return dict.pop(self, *args)
+
+
+def raw_keys(entries: dict) -> list:
+    """The keys of a template's entries, without converting lazy ones."""
+    return entries.raw_keys() if isinstance(entries, LazyEntries) else list(entries)
+
+
 @dataclass
 class Local:
     """Symbolic contributions of one template, in local coordinates ``_q0, _q1, ...``.

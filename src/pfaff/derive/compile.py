@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 import weakref
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,7 +21,7 @@ import sympy as sp
 
 from pfaff.core.errors import ParameterError
 from pfaff.core.symbols import local_qd
-from pfaff.derive.blocks import Block
+from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
 from pfaff.numeric.fused import FusedKernel
@@ -136,7 +136,7 @@ def block_columns(block: Block) -> list:
 
 def _kernel(
     cols: list,
-    exprs: list,
+    exprs: list | Callable[[], list],
     params: Sequence,
     values: Sequence[float],
     count: int,
@@ -146,7 +146,8 @@ def _kernel(
     """A template's kernel; ``lazy``: its code generated on first use."""
 
     def make() -> StreamCode:
-        return stream_code(len(cols), exprs, params, values, count, summed)
+        outs = exprs() if callable(exprs) else exprs  # a callable: the entries made on demand
+        return stream_code(len(cols), outs, params, values, count, summed)
 
     return StreamKernel(cols, make if lazy else make(), count)
 
@@ -159,13 +160,22 @@ def dyn_streams(
     ``lazy``: the kernels' code is generated on first use (general models, whose fused kernel
     may serve every evaluation: half of ``compile()`` on the 14-link pendulum on a cart)."""
     loc = block.local
-    upper = sorted(ab for ab in loc.mass if ab[0] <= ab[1])
-    forcing = loc.forcing
-    fidx = sorted(forcing)
+    if block.family:  # the SymPy entries (exact cancellations found) set the pattern
+        upper = sorted(ab for ab in loc.mass if ab[0] <= ab[1])
+        fidx = sorted(loc.forcing)
+    else:  # the pattern without converting SymEngine's entries (LazyEntries)
+        upper = sorted(ab for ab in raw_keys(loc.mass) if ab[0] <= ab[1])
+        fidx = sorted(set(loc.Q) | set(raw_keys(loc.h)))
     cols = block_columns(block)
     rows = [cols[a] for a in fidx]
     summed = [False] * len(upper) + [isinstance(ix, Index) and ix.fixed for ix in rows]
-    exprs = [loc.mass[ab] for ab in upper] + [forcing[a] for a in fidx]
+
+    def exprs() -> list:
+        forcing = loc.forcing
+        return [loc.mass.get(ab, sp.S.Zero) for ab in upper] + [
+            forcing.get(a, sp.S.Zero) for a in fidx
+        ]
+
     kernel = _kernel(cols, exprs, params, values, block.n_inst, summed, lazy)
 
     def energy_kernel(which: str) -> StreamKernel:

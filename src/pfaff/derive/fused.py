@@ -186,10 +186,11 @@ def _engine_parts(eom: Derivation, args: list) -> tuple | None:
     try:
         for block in eom.blocks:
             loc = block.local
-            exprs = [*loc.Q.values(), *loc.A.values(), loc.b, loc.bias]
-            exprs += [] if loc.f is None else [loc.f]
+            exprs = [*loc.Q.values()]
             if loc.engine is None:  # derived in SymPy: the round trip must be exact
                 exprs += [*loc.mass.values(), *loc.h.values(), loc.kinetic, loc.potential]
+                exprs += [*loc.A.values(), loc.b, loc.bias]
+                exprs += [] if loc.f is None else [loc.f]
             if not engine_safe(exprs):
                 return None
             conv = _Converted(loc)
@@ -229,8 +230,8 @@ class _Converted:
 
     def __init__(self, loc: object) -> None:
         c = symengine.sympify
-        eng = loc.engine
-        if eng is not None:
+        eng = loc.engine or {}
+        if "mass" in eng:
             self.mass, self.h = eng["mass"], eng["h"]
             self.kinetic, self.potential = c(eng["kinetic"]), c(eng["potential"])
         else:
@@ -238,9 +239,13 @@ class _Converted:
             self.h = {a: c(e) for a, e in loc.h.items()}
             self.kinetic, self.potential = c(loc.kinetic), c(loc.potential)
         self.Q = {a: c(e) for a, e in loc.Q.items()}
-        self.A = {a: c(e) for a, e in loc.A.items()}
-        self.b, self.bias = c(loc.b), c(loc.bias)
-        self.f = None if loc.f is None else c(loc.f)
+        if "A" in eng:
+            self.A, self.b, self.bias = eng["A"], c(eng["b"]), c(eng["bias"])
+            self.f = None if eng["f"] is None else c(eng["f"])
+        else:
+            self.A = {a: c(e) for a, e in loc.A.items()}
+            self.b, self.bias = c(loc.b), c(loc.bias)
+            self.f = None if loc.f is None else c(loc.f)
 
 
 def _shared_code(exprs: list, args: list) -> tuple[list[str], list[str], list[str]]:

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from pfaff.core.errors import ModelError
+from pfaff.derive.blocks import raw_keys
 
 if TYPE_CHECKING:
     from pfaff.derive.blocks import Block
@@ -60,7 +61,7 @@ def estimate_bytes(n: int, m: int, blocks: Sequence[Block]) -> int:
     total = BYTES_PER_ROW * (n + m)
     for b in blocks:
         loc = b.local
-        outs = len(loc.mass) + len(loc.h) + len(loc.Q) + len(loc.A) + 3
+        outs = len(raw_keys(loc.mass)) + len(raw_keys(loc.h)) + len(loc.Q) + len(loc.A) + 3
         total += 8 * b.n_inst * outs // 2  # about half the outputs vary with the state
     return total
 

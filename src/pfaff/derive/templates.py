@@ -20,7 +20,7 @@ import sympy as sp
 
 from pfaff.core.errors import ModelError
 from pfaff.core.symbols import local_q, local_qd, t
-from pfaff.derive.blocks import Block, Local
+from pfaff.derive.blocks import Block, LazyEntries, Local
 from pfaff.derive.engine import Engine, Plain, algebra
 from pfaff.derive.equations import Derivation
 from pfaff.derive.memory import check_memory
@@ -104,30 +104,39 @@ def _particle_in(alg: Engine | Plain, m: sp.Expr, r: tuple, k: int) -> Local:
 
 
 class _Kept:
-    """Stores a template's entries in SymPy (tidied, zeros dropped) and, when the algebra is
-    SymEngine, the same entries as SymEngine made them in ``loc.engine``."""
+    """Stores a template's entries: in SymEngine (``loc.engine``) as SymEngine made them, and
+    in SymPy (tidied, zeros dropped) converted lazily (:class:`pfaff.derive.blocks.LazyEntries`)
+    when the algebra is SymEngine; in SymPy at once otherwise."""
 
     def __init__(self, alg: Engine | Plain, loc: Local, **energies: object) -> None:
         self.alg, self.loc = alg, loc
-        if isinstance(alg, Engine):
+        self.lazy = isinstance(alg, Engine)
+        if self.lazy:
             loc.engine = {"mass": {}, "h": {}, "kinetic": 0, "potential": 0, **energies}
+            convert = lambda raw: _tidy(alg.back(raw))  # noqa: E731
+            loc.mass = LazyEntries(loc.engine["mass"], convert)
+            loc.h = LazyEntries(loc.engine["h"], convert)
 
     def mass(self, a: int, b: int, raw: object, *, symmetric: bool = False) -> None:
-        e = _tidy(self.alg.back(raw))
-        if e == 0:
+        keys = [(a, b), (b, a)] if symmetric and a != b else [(a, b)]
+        if self.lazy:
+            if raw != 0:
+                for key in keys:
+                    self.loc.engine["mass"][key] = raw
             return
-        keys = [(a, b), (b, a)] if symmetric else [(a, b)]
-        for key in keys:
-            self.loc.mass[key] = e
-            if self.loc.engine is not None:
-                self.loc.engine["mass"][key] = raw
+        e = _tidy(self.alg.back(raw))
+        if e != 0:
+            for key in keys:
+                self.loc.mass[key] = e
 
     def h(self, a: int, raw: object) -> None:
+        if self.lazy:
+            if raw != 0:
+                self.loc.engine["h"][a] = raw
+            return
         e = _tidy(self.alg.back(raw))
         if e != 0:
             self.loc.h[a] = e
-            if self.loc.engine is not None:
-                self.loc.engine["h"][a] = raw
 
 
 def _lagrangian(L: sp.Expr, k: int, loc: Local) -> Local:
@@ -159,19 +168,31 @@ def _force(key: tuple, k: int) -> Local:
 
 
 def _constraint(key: tuple, k: int) -> Local:
-    q, qd = _qs(k)
-    e = key[2]
+    """A, b, Ȧq̇ + ḃ (and f) of a constraint template, differentiated in SymEngine when the
+    expression allows (on the Whipple bicycle SymPy's derivatives of the contact constraints
+    took 1.5 s), the SymEngine forms kept in ``loc.engine`` for code generation."""
+    alg = algebra([key[2]])
+    q, qd = alg.placeholders(k)
+    e, T = alg.to(key[2]), alg.t
     loc = Local("constraint", k)
     if key[0] == "holonomic":
-        loc.f = e
-        loc.A = {a: d for a in range(k) if (d := e.diff(q[a])) != 0}
-        loc.b = e.diff(t)
-        g = sp.Add(*(loc.A[a] * qd[a] for a in loc.A), loc.b)
+        A = {a: d for a in range(k) if (d := e.diff(q[a])) != 0}
+        b = e.diff(T)
+        g = alg.add([*(A[a] * qd[a] for a in A), b])
     else:
-        loc.A = {a: d for a in range(k) if (d := e.diff(qd[a])) != 0}
-        loc.b = e.xreplace(dict.fromkeys(qd, sp.S.Zero))
+        A = {a: d for a in range(k) if (d := e.diff(qd[a])) != 0}
+        b = (
+            e.subs(dict.fromkeys(qd, alg.to(0)))
+            if isinstance(alg, Engine)
+            else e.xreplace(dict.fromkeys(qd, sp.S.Zero))
+        )
         g = e
-    loc.bias = dt_bias(g, k)
+    bias = alg.add([*(g.diff(q[a]) * qd[a] for a in range(k)), g.diff(T)])
+    loc.A = {a: alg.back(d) for a, d in A.items()}
+    loc.b, loc.bias = alg.back(b), alg.back(bias)
+    loc.f = key[2] if key[0] == "holonomic" else None
+    if isinstance(alg, Engine):
+        loc.engine = {"A": A, "b": b, "bias": bias, "f": e if key[0] == "holonomic" else None}
     return loc
 
 
