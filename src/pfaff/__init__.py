@@ -11,7 +11,7 @@ The package is laid out by pipeline stage, imports going only downward (see ARCH
 """
 
 from pfaff import attitude, models
-from pfaff.api import EquationsOfMotion, Solution, System
+from pfaff.api import EquationsOfMotion, RootLocus, Solution, System, root_locus
 from pfaff.core.errors import (
     BodyInertiaError,
     ConstraintError,
@@ -32,6 +32,7 @@ from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 from pfaff.mechanics.bodies import Body
 from pfaff.modelfile import ModelFile, ModelFileError, load_model
 from pfaff.numeric import NumericModel
+from pfaff.numeric.linearization import Linearization
 from pfaff.results.trajectory import Trajectory
 
 __all__ = [
@@ -43,6 +44,7 @@ __all__ = [
     "EulerAngles",
     "ForceWork",
     "InertiaError",
+    "Linearization",
     "ModelError",
     "ModelFile",
     "ModelFileError",
@@ -53,6 +55,7 @@ __all__ = [
     "PfaffError",
     "PlanarAngle",
     "Quaternion",
+    "RootLocus",
     "SimulationError",
     "Solution",
     "StateError",
@@ -63,6 +66,7 @@ __all__ = [
     "coordinates",
     "load_model",
     "models",
+    "root_locus",
     "simulate",
     "t",
 ]

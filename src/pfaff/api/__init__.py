@@ -6,6 +6,7 @@ the compiled model. These classes add the methods that chain them.
 """
 
 from pfaff.api.equations import EquationsOfMotion, Solution
+from pfaff.api.locus import RootLocus, root_locus
 from pfaff.api.system import System
 
-__all__ = ["EquationsOfMotion", "Solution", "System"]
+__all__ = ["EquationsOfMotion", "RootLocus", "Solution", "System", "root_locus"]

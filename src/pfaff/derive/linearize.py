@@ -616,3 +616,31 @@ def _check_steady(A: np.ndarray, ind: list[int], qd0: list, names: list[str]) ->
             + ", ".join(bad)
             + " change while the linearized equations depend on them"
         )
+
+
+class ModelLinearizer:
+    """The linearization a compiled model hands to: its derivation and parameter values.
+
+    :meth:`pfaff.NumericModel.linearize` calls it with numbers; the derivatives are the exact
+    ones of :class:`LinearForms` (made on the first call, shared with the derivation's own
+    :meth:`pfaff.EquationsOfMotion.linearize`), evaluated with these values.
+    """
+
+    def __init__(self, eom: Derivation, values: dict[str, float]) -> None:
+        self.eom = eom
+        self.values = dict(values)
+
+    def __call__(
+        self,
+        t0: float,
+        q: np.ndarray,
+        qd: np.ndarray,
+        independent: object,
+        independent_speeds: object = None,
+        inputs: object = (),
+    ) -> Linearization:
+        coords = self.eom.coordinates
+        op: dict = {t: float(t0), **self.values}
+        op.update({c: float(v) for c, v in zip(coords, q, strict=True)})
+        op.update({speed(c): float(v) for c, v in zip(coords, qd, strict=True)})
+        return linearize(self.eom, op, independent, independent_speeds, inputs)

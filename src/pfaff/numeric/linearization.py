@@ -24,7 +24,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from pfaff.core.errors import ConstraintError, PfaffError
+from pfaff.core.errors import ConstraintError, ModelError, PfaffError
+from pfaff.numeric.checks import real_number, real_vector
 
 SINGULAR = 1e-10  # a block whose smallest singular value is below this times its largest: singular
 ZERO_COLUMN = 1e-12  # an entry below this times max |A| counts as zero (ignorable coordinates)
@@ -314,3 +315,26 @@ class Linearization:
         return (
             f"<pfaff.Linearization: {len(self.states)} states, {len(self.inputs)} inputs, {kind}>"
         )
+
+
+def linearize_model(
+    model: Any,
+    t: float,
+    q: object,
+    qd: object,
+    independent: object,
+    independent_speeds: object = None,
+    inputs: object = (),
+) -> Linearization:
+    """:meth:`pfaff.NumericModel.linearize`: the state checked, then the linearizer the compile
+    stage attached to the model (exact derivatives of its equations) called."""
+    source = getattr(model, "linearizer", None)
+    if source is None:
+        raise ModelError(
+            "this model cannot be linearized: compile it with EquationsOfMotion.compile "
+            "(models with families are not supported yet)"
+        )
+    t = real_number(t, "t")
+    q = real_vector(q, "q", model.n, model.coordinate_names)
+    qd = real_vector(qd, "qd", model.n, model.coordinate_names)
+    return source(t, q, qd, independent, independent_speeds, inputs)

@@ -48,6 +48,7 @@ from pfaff.numeric.kkt import (
     row_scales,
     solve_floored,
 )
+from pfaff.numeric.linearization import Linearization, linearize_model
 from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.structured import ConStreams, DynStreams, KKTPattern, StreamModel
@@ -406,6 +407,32 @@ class NumericModel(StreamModel):
         if v.dtype.kind == "c":
             raise StateError(not_real(t))
         return v
+
+    def linearize(
+        self,
+        t: float,
+        q: object,
+        qd: object,
+        independent: object,
+        independent_speeds: object = None,
+        inputs: object = (),
+    ) -> Linearization:
+        """Linearize about the state (q, q̇) at time t: ẋ = A x + B u (numeric).
+
+        The same as :meth:`pfaff.EquationsOfMotion.linearize` with this model's parameter
+        values, with exact derivatives (differentiated symbolically once, then evaluated); the
+        coordinates of ``independent`` and ``independent_speeds`` and the ``inputs`` (parameters)
+        may be given by name. See :func:`pfaff.numeric.linearization.linearize_model`.
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+        >>> model.linearize(0.0, [0.0], [0.0], ["theta"]).A
+        array([[ 0.  ,  1.  ],
+               [-9.81,  0.  ]])
+        """
+        return linearize_model(self, t, q, qd, independent, independent_speeds, inputs)
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).

@@ -1,0 +1,118 @@
+"""``pfaff.root_locus``: eigenvalues of a linearization over a range of one parameter."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+import sympy as sp
+
+from pfaff.core.errors import ModelError, ModelTypeError
+from pfaff.derive.linearize import linearize
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from pfaff.derive.equations import Derivation
+
+
+class RootLocus(NamedTuple):
+    """What :func:`root_locus` returns (unpacks as ``values, eigenvalues, figure``).
+
+    Attributes
+    ----------
+    values : ndarray, shape (k,)
+        The parameter's values.
+    eigenvalues : ndarray, shape (k, n_states)
+        Per value, the eigenvalues of A (sorted by real part, then imaginary part).
+    figure : matplotlib.figure.Figure
+        Their real and imaginary parts against the parameter.
+    """
+
+    values: np.ndarray
+    eigenvalues: np.ndarray
+    figure: Figure
+
+
+def _point(op_point: dict | Callable, name: str, value: float, params: set[str]) -> dict:
+    """The operating point at one value: ``op_point(value)``, or the dict with the symbol of
+    that name replaced by the value in every entry (and the parameter of that name set)."""
+    if callable(op_point):
+        point = op_point(value)
+        if not isinstance(point, dict):
+            raise ModelTypeError(f"`op_point({value})` must return a dict; got {point!r:.60}")
+        return point
+    sym = sp.Symbol(name)
+    out = {}
+    for key, v in op_point.items():
+        if isinstance(v, sp.Basic) and name in {s.name for s in v.free_symbols}:
+            v = v.xreplace({s: value for s in v.free_symbols if s.name == name})
+        out[key] = v
+    if name in params:
+        out.pop(sym, None)
+        out[name] = value
+    return out
+
+
+def root_locus(
+    eom: Derivation,
+    op_point: dict | Callable,
+    independent: object,
+    vary: dict,
+    independent_speeds: object = None,
+    inputs: object = (),
+) -> RootLocus:
+    """Eigenvalues of :meth:`pfaff.EquationsOfMotion.linearize` as one parameter varies.
+
+    Parameters
+    ----------
+    eom : EquationsOfMotion
+    op_point : dict or callable
+        The operating point: a dict in which the varied symbol may appear in values (the
+        bicycle's rates ``{x.diff(t): v, ...}``) and which it completes when it is a parameter of
+        the model; or a function of the value returning the dict
+        (:func:`pfaff.models.bicycle.bicycle_operating_point`).
+    independent, independent_speeds, inputs
+        As for :meth:`~pfaff.EquationsOfMotion.linearize`.
+    vary : dict
+        One entry: the parameter's name (or Symbol) and its values.
+
+    Returns
+    -------
+    RootLocus
+        ``(values, eigenvalues, figure)``, eigenvalues of shape (len(values), n_states).
+
+    Examples
+    --------
+    The pendulum's eigenvalues ±i√(g/L) as g grows:
+
+    >>> import pfaff
+    >>> eom = pfaff.models.pendulum().equations()
+    >>> th = eom.coordinates[0]
+    >>> values, eig, fig = pfaff.root_locus(eom, {th: 0, "m": 1, "L": 1}, [th], vary={"g": [1, 4]})
+    >>> eig.imag
+    array([[-1.,  1.],
+           [-2.,  2.]])
+    """
+    if not isinstance(vary, dict) or len(vary) != 1:
+        raise ModelTypeError(
+            f"`vary` must be a dict of one parameter and its values; got {vary!r:.60}"
+        )
+    ((key, values),) = vary.items()
+    if not isinstance(key, str | sp.Symbol):
+        raise ModelTypeError(f"`vary`: the parameter must be a name or Symbol; got {key!r:.60}")
+    name = key if isinstance(key, str) else key.name
+    values = np.asarray(values, dtype=float).ravel()
+    if not values.size or not np.all(np.isfinite(values)):
+        raise ModelError("`vary`: give at least one value, every one finite")
+    params = {p.name for p in eom.parameters}
+    rows = []
+    for value in values:
+        point = _point(op_point, name, float(value), params)
+        lin = linearize(eom, point, independent, independent_speeds, inputs)
+        rows.append(lin.eigenvalues())
+    eig = np.array(rows)
+    from pfaff.results.locus import locus_figure
+
+    return RootLocus(values, eig, locus_figure(values, eig, name))
