@@ -34,6 +34,7 @@ from pfaff.modelfile import ModelFile, ModelFileError, load_model
 from pfaff.numeric import NumericModel
 from pfaff.numeric.linearization import Linearization
 from pfaff.results.trajectory import Trajectory
+from pfaff.sweep import sweep
 
 __all__ = [
     "MRP",
@@ -68,6 +69,7 @@ __all__ = [
     "models",
     "root_locus",
     "simulate",
+    "sweep",
     "t",
 ]
 __version__ = "0.1.0"

@@ -245,6 +245,7 @@ def build_model(
         solver=solver,
     )
     model.attitudes = attitude_sets(eom)
+    model._restream = Restream(eom, params, constraints_only)  # for model.with_parameters
     if not constraints_only and model.solver == "range-space":
         start = time.process_time()
         fused, status = fused_kernel(eom)
@@ -297,3 +298,47 @@ def compile_equations(
     if "equations" in getattr(eom, "timings", {}):
         model.timings["equations"] = eom.timings["equations"]
     return model
+
+
+class Restream:
+    """The stream parts of a compiled model for other parameter values
+    (:meth:`pfaff.NumericModel.with_parameters`): each template whose expressions use a changed
+    parameter gets new kernels (lazy: generated on first use); the others are shared."""
+
+    def __init__(self, eom: Derivation, params: tuple, constraints_only: bool) -> None:
+        self.params, self.constraints_only = params, constraints_only
+        self.dyn = [] if constraints_only else [b for b in eom.blocks if b.local.kind == "dynamics"]
+        self.con = [b for b in eom.blocks if b.local.kind == "constraint"]
+        self._uses: tuple[list, list] | None = None
+
+    def uses(self) -> tuple[list[frozenset], list[frozenset]]:
+        """Per dynamics and per constraint block: the indices of the parameters it uses."""
+        if self._uses is None:
+            index = {p.name: i for i, p in enumerate(self.params)}
+
+            def used(exprs: list) -> frozenset:
+                names = {str(s) for e in exprs for s in sp.sympify(e).free_symbols}
+                return frozenset(index[x] for x in names if x in index)
+
+            loc = [b.local for b in self.dyn]
+            dyn_exprs = [
+                [*x.mass.values(), *x.forcing.values(), *energy_exprs(b), *power_exprs(b)]
+                for b, x in zip(self.dyn, loc, strict=True)
+            ]
+            con_exprs = [constraint_layout(b)[1] for b in self.con]
+            self._uses = ([used(e) for e in dyn_exprs], [used(e) for e in con_exprs])
+        return self._uses
+
+    def __call__(self, old: list, new: list, dyn: list, con: list) -> tuple[list, list]:
+        changed = {i for i, (a, b) in enumerate(zip(old, new, strict=True)) if a != b}
+        du, cu = self.uses()
+        p = self.params
+        dyn = [
+            dyn_streams(b, p, new, lazy=True) if u & changed else d
+            for b, u, d in zip(self.dyn, du, dyn, strict=True)
+        ]
+        con = [
+            con_streams(b, p, new, lazy=True) if u & changed else c
+            for b, u, c in zip(self.con, cu, con, strict=True)
+        ]
+        return dyn, con

@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -28,7 +28,9 @@ import scipy.sparse as sps
 from pfaff.core.errors import (
     ConstraintError,
     InertiaError,
+    ModelTypeError,
     OptionError,
+    ParameterError,
     PfaffError,
     StateError,
     raised_in_generated_code,
@@ -621,6 +623,78 @@ class NumericModel(StreamModel):
         if isinstance(e, SingularKKT) and e.detail == "inconsistent equations":
             return f"{msg} (inconsistent equations)"
         return msg
+
+    # ------------------------------------------------------------------ other parameter values
+    # set by the compile stage (pfaff.derive.compile.Restream): the template stream parts for new
+    # values, restream(old values, new values, dyn, con) -> (dyn, con); None: values are fixed
+    _restream: Callable[[list, list, list, list], tuple[list, list]] | None = None
+
+    def with_parameters(self, values: Mapping[str, float]) -> NumericModel:
+        """This compiled model with other parameter values: nothing derived or generated again.
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            New values by parameter name; the parameters not named keep theirs.
+
+        Returns
+        -------
+        NumericModel
+            A new model sharing this one's compiled code (this one is unchanged).
+
+        Notes
+        -----
+        The fused kernel of a small system and its machine code take the parameter values at
+        run time: they are shared as they are (about 20 µs for the whole call). The template
+        kernels fold the values into their code, so the templates whose expressions use a
+        changed parameter get new kernels, generated on first use only (a few milliseconds
+        each): a fused model uses them for the power of its applied forces (the energy
+        balance), for the inertia check's fallback and for explicit calls such as
+        :meth:`mass_matrix` of large systems. Particle masses are not checked again here: the
+        inertia check at the first state of a simulation refuses a mass that is not positive.
+
+        Raises
+        ------
+        ParameterError
+            An unknown name, or a value that is not a finite real number.
+
+        Examples
+        --------
+        >>> import numpy as np, pfaff
+        >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
+        >>> heavy = model.with_parameters({"m": 3})
+        >>> lam = heavy.accelerations(0.0, np.array([0.0, -2.0]), np.zeros(2))[1]
+        >>> round(float(-2 * 2 * lam[0]), 12), model.parameters["m"]  # tension m g; m unchanged
+        (29.43, 1.0)
+        """
+        new = {**self.parameters}
+        problems = []
+        for name, v in values.items():
+            if name not in new:
+                problems.append(f"unknown parameter `{name}` (the model's: {', '.join(new)})")
+            elif isinstance(v, bool | str | bytes | complex) or np.ndim(v) != 0:
+                problems.append(f"parameter `{name}` must be a real number, got {v!r:.80}")
+            elif not math.isfinite(v := float(v)):  # type: ignore[arg-type]
+                problems.append(f"parameter `{name}` is {v} (NaN or infinite)")
+            else:
+                new[name] = v
+        if problems:
+            raise ParameterError("bad parameters: " + "; ".join(problems))
+        p = list(new.values())
+        if p != self._p and self._restream is None:
+            raise ModelTypeError("this model was not compiled with a way to change its parameters")
+        dyn, con = self.dyn, self.con
+        if p != self._p:  # new kernels for the templates that use a changed value
+            dyn, con = self._restream(self._p, p, dyn, con)  # type: ignore[misc]
+        model = NumericModel(
+            self.n, self.m, dyn, con, coordinate_names=self.coordinate_names,
+            multiplier_names=self.multiplier_names, constraint_names=self.constraint_names,
+            holonomic=self.holonomic, parameters=new, solver=self.solver,
+        )  # fmt: skip
+        model.attitudes, model._restream = self.attitudes, self._restream
+        model.timings = dict(self.timings)
+        model._fused, model._prefer_machine = self._fused, self._prefer_machine  # shared code
+        return model
 
 
 def _check_finite(

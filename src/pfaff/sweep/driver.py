@@ -1,0 +1,339 @@
+"""``pfaff.sweep``: a grid of simulations of a model file, on Dask or in this process.
+
+The client reads the file (nothing is derived here), checks the grid, and sends tasks that each
+carry the file's text and a batch of run indices (:func:`pfaff.sweep.worker.run_batch`); workers
+derive and compile the file once per process and give each run its values at run time. The
+first task is a probe of two runs: its timing sets the batch size, so that each task lasts at
+least :data:`TASK_SECONDS` (scheduling costs about a millisecond per task) and the sweep still
+makes several tasks per worker to balance the load. Dask reschedules the tasks of a worker that
+dies; a batch whose worker died :data:`ALLOWED_FAILURES` times is split into single runs, and a
+run that still kills its worker is reported failed.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import sys
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pfaff.core.errors import OptionError
+from pfaff.modelfile import ModelFile, load_model
+from pfaff.sweep.grid import make_grid
+from pfaff.sweep.result import Results
+from pfaff.sweep.worker import SweepSpec, run_batch
+
+TASK_SECONDS = 0.1  # shortest task (Dask's overhead is ~1 ms per task)
+LONGEST_TASK = 2.0  # longest task aimed at when the sweep is large (load balance, progress)
+TASKS_PER_WORKER = 4
+ALLOWED_FAILURES = 3  # distributed's default "allowed-failures": KilledWorker after that
+SAMPLES = 201
+SYNC = ("synchronous", "sync")
+PASSED = ("t_end", "samples")  # [simulate] keys the sweep uses itself, not pfaff.simulate
+
+
+def sweep(
+    model: str | os.PathLike | ModelFile,
+    vary: Mapping[str, Sequence[float] | np.ndarray],
+    *,
+    t_end: float | None = None,
+    samples: int | None = None,
+    scheduler: Any = None,
+    workers: int | None = None,
+    progress: bool | None = None,
+) -> Any:
+    """Simulate a model file over a grid of parameter values and initial states.
+
+    Every run starts at t = 0 with the file's initial state (the varied entries replaced), uses
+    the file's ``[simulate]`` settings (method, tolerances, ...) and is sampled at ``t_eval =
+    linspace(0, t_end, samples)``.
+
+    Parameters
+    ----------
+    model : str, PathLike or ModelFile
+        A model file, or one loaded by :func:`pfaff.load_model` (its ``parameters``, ``q0``,
+        ``qd0`` and ``simulate`` as they are now; its file is read again for the workers).
+    vary : dict of str to array_like
+        Name -> values, one dimension of the result each, in this order: a parameter (``"L"``),
+        an initial coordinate ``"q0.<coordinate>"`` or an initial speed ``"qd0.<coordinate>"``.
+        The runs are the outer product.
+    t_end : float, optional
+        End time; default: the file's ``[simulate] t_end``.
+    samples : int, optional
+        Reported times per run; default: the file's ``[simulate] samples``, else 201.
+    scheduler : None, str or distributed.Client
+        None: start a local Dask cluster of ``workers`` processes, closed at the end.
+        ``"tcp://host:8786"``: an existing cluster's scheduler. A ``distributed.Client`` (or a
+        cluster): use it as it is. ``"synchronous"``: every run in this process, without Dask
+        (small sweeps, tests, debugging).
+    workers : int, optional
+        Processes of the local cluster; default: the number of CPUs (at most one per run).
+    progress : bool, optional
+        A progress bar on stderr; default: when stderr is a terminal.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions: the varied names (coordinates: their values), ``time``, ``coordinate`` and
+        ``multiplier`` (with its ``constraint`` names) as in :meth:`pfaff.Trajectory.to_xarray`.
+        Variables ``q``, ``qd`` (varied..., time, coordinate), ``multipliers`` (varied..., time,
+        multiplier), NaN past the end of a failed run, and per run ``status`` ("success",
+        "failed", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
+        ``constraint_residual`` (max |f|, |A q̇ + b|) and ``seconds``. Attributes: the model,
+        ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``.
+
+    Raises
+    ------
+    OptionError
+        A bad name or value in ``vary``, no end time, a bad option.
+    ModelFileError
+        The file cannot be read.
+    PfaffError
+        The model cannot be derived or compiled at all. (A run that fails is a status.)
+
+    Notes
+    -----
+    With the local cluster (processes are started with ``spawn``), call ``sweep`` under
+    ``if __name__ == "__main__":`` in a script. Workers of an existing cluster need pfaff
+    installed. Parameters change at run time, so the file is compiled once per worker process;
+    see :meth:`pfaff.NumericModel.with_parameters` for what that costs per run.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, numpy as np, pfaff
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "spring.toml"
+    >>> _ = path.write_text('''
+    ... [model]
+    ... coordinates = ["x"]
+    ... parameters = { m = 1.0, k = 1.0 }
+    ... kinetic = "m*dot(x)**2/2"
+    ... potential = "k*x**2/2"
+    ... [initial]
+    ... q = { x = 1.0 }
+    ... [simulate]
+    ... t_end = 3.141592653589793
+    ... ''')
+    >>> ds = pfaff.sweep(path, {"k": [1.0, 4.0], "q0.x": [1.0, 2.0]}, samples=3,
+    ...                  scheduler="synchronous")
+    >>> ds.q.dims, ds.status.values.tolist()
+    (('k', 'q0.x', 'time', 'coordinate'), [['success', 'success'], ['success', 'success']])
+    >>> np.round(ds.q.sel(time=np.pi, coordinate="x").values, 6).tolist()  # x0 cos(√k t)
+    [[-1.0, -2.0], [1.0, 2.0]]
+    """
+    start = time.perf_counter()
+    mf, text = _load(model)
+    coordinates = _coordinates(mf)
+    grid = make_grid(vary, list(mf.parameters), coordinates)
+    t_end = _end_time(mf, t_end)
+    samples = _samples(mf, samples)
+    options = {k: v for k, v in mf.simulate.items() if k not in PASSED}
+    spec = SweepSpec(
+        text=text,
+        filename=mf.path.name,
+        parameters=dict(mf.parameters),
+        q0=tuple(float(x) for x in mf.q0),
+        qd0=tuple(float(x) for x in mf.qd0),
+        coordinates=tuple(coordinates),
+        grid=grid,
+        t_eval=np.linspace(0.0, t_end, samples),
+        options=options,
+    )
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1
+    ):
+        raise OptionError(f"`workers` must be a whole number of at least 1, got {workers!r:.40}")
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    results = Results(grid, samples, len(coordinates))
+    run_info = _execute(spec, results, scheduler, workers, show)
+    if not results.names:
+        results.names = _names_of(mf)
+    attrs = {
+        "model": mf.name,
+        "file": str(mf.path),
+        "t_end": t_end,
+        "samples": samples,
+        "method": str(options.get("method", "projection")),
+        **run_info,
+        "wall_seconds": time.perf_counter() - start,
+    }
+    return results.dataset(spec.t_eval, attrs)
+
+
+def _load(model: object) -> tuple[ModelFile, str]:
+    if isinstance(model, ModelFile):
+        mf = model
+    elif isinstance(model, str | os.PathLike):
+        mf = load_model(model)
+    else:
+        raise TypeError(
+            f"`model` must be a model file's path or a pfaff.ModelFile, got {type(model).__name__}"
+        )
+    try:
+        text = Path(mf.path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise OptionError(
+            f"`model`: its file {mf.path} cannot be read again for the workers ({e})"
+        ) from None
+    return mf, text
+
+
+def _coordinates(mf: ModelFile) -> list[str]:
+    return [str(getattr(q, "func", q)) for q in mf.system.coordinates]
+
+
+def _end_time(mf: ModelFile, t_end: float | None) -> float:
+    if t_end is None:
+        if "t_end" not in mf.simulate:
+            raise OptionError(
+                f"no end time: pass `t_end` (--t-end) or set t_end in [simulate] of {mf.path}"
+            )
+        t_end = mf.simulate["t_end"]
+    if isinstance(t_end, bool) or not isinstance(t_end, int | float | np.floating | np.integer):
+        raise OptionError(f"`t_end` must be a number, got {t_end!r:.40}")
+    if not (math.isfinite(t_end) and t_end > 0):
+        raise OptionError(f"`t_end` must be positive and finite, got {t_end!r}")
+    return float(t_end)
+
+
+def _samples(mf: ModelFile, samples: int | None) -> int:
+    if samples is None:
+        samples = mf.simulate.get("samples", SAMPLES)
+    if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples < 2:
+        raise OptionError(f"`samples` must be a whole number of at least 2, got {samples!r:.40}")
+    return int(samples)
+
+
+def _names_of(mf: ModelFile) -> dict[str, list[str]]:
+    """Coordinate, multiplier and constraint names from the derivation (every run failed
+    before its model was compiled: the workers had none to report)."""
+    eom = mf.system.equations()
+    return {
+        "coordinate_names": [str(q.func) for q in eom.coordinates],
+        "multiplier_names": [str(s) for s in eom.multipliers],
+        "constraint_names": list(eom.constraint_names),
+    }
+
+
+def _execute(
+    spec: SweepSpec, results: Results, scheduler: Any, workers: int | None, show: bool
+) -> dict[str, Any]:
+    """Run every grid point into ``results``; how it ran (for the dataset's attributes)."""
+    from tqdm.auto import tqdm
+
+    with tqdm(total=spec.grid.size, disable=not show, unit="run", desc="sweep") as bar:
+        if isinstance(scheduler, str) and scheduler in SYNC:
+            for batch in _chunks(range(spec.grid.size), max(1, spec.grid.size // 100)):
+                bar.update(results.add(run_batch(spec, batch)))
+            return {"scheduler": "synchronous", "workers": 1, "batch": 0}
+        with _client(scheduler, workers, spec.grid.size) as client:
+            return _distributed(client, spec, results, bar)
+
+
+class _client:
+    """A context giving a ``distributed.Client``: a new local cluster (closed at exit), an
+    address, or the caller's client (left open)."""
+
+    def __init__(self, scheduler: Any, workers: int | None, runs: int) -> None:
+        self.scheduler, self.workers, self.runs = scheduler, workers, runs
+        self.owned: list[Any] = []
+
+    def __enter__(self) -> Any:
+        from distributed import Client, LocalCluster
+
+        s = self.scheduler
+        if isinstance(s, Client):
+            return s
+        if s is not None and self.workers is not None:
+            raise OptionError("`workers` sets the size of the local cluster: not with `scheduler`")
+        if s is None:
+            n = self.workers or min(os.cpu_count() or 1, self.runs)
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
+            self.owned.append(cluster)
+            s = cluster
+        elif not isinstance(s, str) and not hasattr(s, "scheduler_address"):
+            raise OptionError(
+                "`scheduler` must be None, a scheduler address (tcp://host:8786), "
+                f"'synchronous' or a distributed.Client, got {s!r:.60}"
+            )
+        try:
+            client = Client(s, timeout=30, set_as_default=False)
+        except OSError as e:
+            self.__exit__()
+            raise OptionError(f"cannot reach the Dask scheduler at {s!r}: {e}") from None
+        self.owned.insert(0, client)
+        return client
+
+    def __exit__(self, *exc: object) -> None:
+        for thing in self.owned:
+            try:
+                thing.close()
+            except Exception:  # a cluster already gone
+                pass
+
+
+def _distributed(client: Any, spec: SweepSpec, results: Results, bar: Any) -> dict[str, Any]:
+    """The probe task, then the rest in batches, as they complete; dead workers' batches split."""
+    from distributed import as_completed
+
+    n = spec.grid.size
+    probe = list(range(min(2, n)))
+    out = client.submit(run_batch, spec, probe, pure=False).result()
+    bar.update(results.add(out))
+    workers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})))
+    batch = batch_size(float(np.nanmin(out["seconds"][-1:])), n - len(probe), workers)
+    futures = {
+        client.submit(run_batch, spec, b, pure=False): b
+        for b in _chunks(range(len(probe), n), batch)
+    }
+    pending = as_completed(futures, loop=client.loop)
+    for fut in pending:
+        indices = futures.pop(fut)
+        try:
+            out = fut.result()
+        except Exception as e:
+            if type(e).__name__ != "KilledWorker":
+                for f in futures:
+                    f.cancel()
+                raise
+            if len(indices) == 1:
+                results.fail(indices, f"the worker process died running it ({e})")
+                bar.update(1)
+                continue
+            for i in indices:  # find the run that kills its worker: one task each
+                f = client.submit(run_batch, spec, [i], pure=False)
+                futures[f] = [i]
+                pending.add(f)
+            continue
+        bar.update(results.add(out))
+    return {"scheduler": str(client.scheduler.address), "workers": workers, "batch": batch}
+
+
+def batch_size(seconds: float, runs: int, workers: int) -> int:
+    """Runs per task: each at least ``TASK_SECONDS``, and for large sweeps about
+    ``TASKS_PER_WORKER`` tasks per worker, up to ``LONGEST_TASK`` each.
+
+    Examples
+    --------
+    >>> batch_size(0.01, 256, 2), batch_size(0.5, 256, 2), batch_size(1e-3, 10**6, 8)
+    (32, 4, 2000)
+    """
+    seconds = max(seconds, 1e-5) if math.isfinite(seconds) else TASK_SECONDS
+    target = min(LONGEST_TASK, max(TASK_SECONDS, seconds * runs / (TASKS_PER_WORKER * workers)))
+    return max(1, min(runs, math.ceil(target / seconds)))
+
+
+def _chunks(indices: range, size: int) -> Iterator[list[int]]:
+    for lo in range(indices.start, indices.stop, size):
+        yield list(range(lo, min(lo + size, indices.stop)))
