@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import traceback
@@ -102,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _simulation_options(pend)
     _body_demos(dsub)
+    _bicycle_demo(dsub)
     from pfaff.cli.filecmd import add_parsers  # `pfaff equations` and `pfaff run` on a file
 
     add_parsers(sub, _debug_option)
@@ -135,6 +137,28 @@ def _body_demos(dsub: argparse._SubParsersAction) -> None:
         )
         d.add_argument("--json", action="store_true", help="print one JSON object instead of text")
         d.add_argument("--plot", metavar="FILE.png", help="write a figure of the run")
+
+
+def _bicycle_demo(dsub: argparse._SubParsersAction) -> None:
+    """``pfaff demo bicycle``: the Whipple bicycle benchmark, linearized."""
+    d = dsub.add_parser(
+        "bicycle", help="the Whipple bicycle benchmark: eigenvalues, weave and capsize speeds"
+    )
+    _debug_option(d)
+    d.add_argument("--speed", type=float, default=5.0, help="forward speed, m/s (default 5)")
+    d.add_argument("--plot", metavar="FILE.png", help="write the root locus over 0-10 m/s")
+    d.add_argument("--json", action="store_true", help="print one JSON object instead of text")
+
+
+def run_bicycle(args: argparse.Namespace) -> int:
+    """``pfaff demo bicycle``: 0 on success."""
+    from pfaff.cli.bicycledemo import bicycle_report, format_bicycle
+
+    if not math.isfinite(args.speed):
+        raise OptionError(f"--speed must be finite; got {args.speed}")
+    rep = bicycle_report(args.speed, args.plot)
+    print(json.dumps(rep, indent=1) if args.json else format_bicycle(rep))
+    return 0
 
 
 def run_body_demo(args: argparse.Namespace) -> int:
@@ -381,6 +405,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             if getattr(args, "animate", None):
                 _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
             return run_equations(args) if args.command == "equations" else run_model(args)
+        if args.demo == "bicycle":
+            check_files(args)
+            return run_bicycle(args)
         if args.demo in ("tumble", "top", "disk"):
             check_files(args)
             return run_body_demo(args)
