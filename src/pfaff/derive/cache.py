@@ -42,7 +42,7 @@ from pathlib import Path
 import symengine
 import sympy as sp
 
-FORMAT = 1  # the layout of an entry's payload; a change makes old entries unreachable
+FORMAT = 2  # the layout of an entry's payload; a change makes old entries unreachable
 
 
 def cache_dir() -> Path | None:

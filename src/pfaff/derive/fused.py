@@ -343,18 +343,21 @@ def _llvm_factory(eom: Derivation, key: str | None) -> Callable[[], Callable | N
     (the kernel's outputs, the constraint rows, and the floored Schur solve run on them by
     :func:`pfaff.numeric.smallsolve.schur_expressions`: the algorithm and floor of ``rfn``),
     compiled by SymEngine's LLVM backend on first use, or loaded from the on-disk cache. It
-    holds ``eom`` (whose expressions it compiles) for as long as a model holds the kernel."""
+    holds ``eom`` (whose expressions it compiles) for as long as a model holds the kernel.
+    ``make(build=False)`` only loads it from the cache (None when it is not there)."""
     done: list = []
 
-    def make() -> Callable | None:
+    def make(build: bool = True) -> Callable | None:
         if done:
             return done[0]
-        done.append(None)
         raw = cache.load(key, "llvm") if key is not None else None
         if raw is not None:
             with contextlib.suppress(Exception):
-                done[0] = pickle.loads(raw)  # our own entry: private folder, hash verified
+                done.append(pickle.loads(raw))  # our own entry: private folder, hash verified
                 return done[0]
+        if not build:
+            return None
+        done.append(None)
         try:
             (mass, acon, exprs, _), args = _parts(eom)
             done[0] = _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
@@ -395,9 +398,11 @@ def _llvm_rhs(mass: list, acon: list, exprs: list, n: int, m: int, args: list) -
         ),
         "capped": lambda tj, top: se.Min(tj, top),
     }
-    qdd = schur_expressions(mass, acon, values, n, m, namespace)
+    solved = schur_expressions(mass, acon, values, n, m, namespace)  # q̈, then λ
     inputs = [*syms, alpha, beta, *taus, cap]
-    return se.Lambdify(inputs, [*y[n:], *qdd], backend="llvm", cse=True)
+    # outputs: q̇, q̈, λ, then the kernel's own outputs (those of fn): one call gives a model
+    # everything it evaluates at a state (NumericModel.use_machine_code)
+    return se.Lambdify(inputs, [*y[n:], *solved, *ex], backend="llvm", cse=True)
 
 
 def _rhs_function(

@@ -52,10 +52,11 @@ class FusedKernel:
     arows, acols : tuple of int
         Row and column of each A entry, in output order.
     llvm : callable or None
-        ``llvm()`` compiles (on first call, then cached) the same right-hand side as ``rfn`` to
-        machine code and returns ``f(x) -> [q̇, q̈]`` on the flat array
-        ``x = [t, q, q̇, params, alpha, beta, taus, cap]``, or None where it cannot (no LLVM in
-        this SymEngine). Non-finite outputs mean "take ``rfn``" (M not positive definite).
+        ``llvm()`` compiles (on first call, then cached in memory and on disk) the same
+        right-hand side as ``rfn`` to machine code and returns ``f(x) -> [q̇, q̈, λ, fn's
+        outputs]`` on the flat array ``x = [t, q, q̇, params, alpha, beta, taus, cap]``, or None
+        where it cannot (no LLVM in this SymEngine); ``llvm(build=False)`` only loads it from the
+        on-disk cache. Non-finite outputs mean "take ``rfn``" (M not positive definite).
     """
 
     fn: Callable
@@ -69,7 +70,7 @@ class FusedKernel:
     offsets: tuple[int, int, int, int]
     arows: tuple[int, ...]
     acols: tuple[int, ...]
-    llvm: Callable[[], Callable | None] | None = None
+    llvm: Callable[..., Callable | None] | None = None
 
     def entries(self, K: np.ndarray) -> list[float]:
         """The M and A entries of an assembled K, as the arguments of ``cfn``."""

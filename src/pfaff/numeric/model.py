@@ -124,6 +124,9 @@ class NumericModel(StreamModel):
         self._pattern = None  # made on first use: the fused kernel may serve every evaluation
         self._fused: FusedKernel | None = None  # see use_fused
         self._prefer_machine: bool | None = None  # machine-code right-hand side faster? (timed)
+        self._machine: Callable | None = None  # the machine code, once checked (_use_machine)
+        self._machine_buf = np.zeros(0)
+        self._machine_last: tuple | None = None  # (t, q, q̇, [q̈, λ]) of its last evaluation
         # M not safely positive definite at the first state of the run (check_determined): the
         # range-space solve (M⁻¹) is unusable, the whole augmented matrix is solved by LU
         self._full_kkt = False
@@ -158,7 +161,55 @@ class NumericModel(StreamModel):
             return False
         if fast is not None and np.allclose(fast[self.n :], slow, rtol=1e-10, atol=1e-13):
             self._fused = fused
+        if fused.llvm is not None:  # machine code made before (the on-disk cache): use it now
+            compiled = fused.llvm(build=False)
+            if compiled is not None:
+                self._use_machine(compiled)
         return True
+
+    def compile_machine_code(self) -> bool:
+        """Compile (or load from the on-disk cache) the machine code of a small model now, so
+        that :meth:`accelerations` uses it from the first call (a simulation compiles it
+        anyway); False when the model has none (too large, or SymEngine without LLVM).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
+        >>> isinstance(model.compile_machine_code(), bool)
+        True
+        """
+        fk = self._fused
+        if self._machine is not None:
+            return True
+        if fk is None or fk.llvm is None:
+            return False
+        compiled = fk.llvm()
+        return compiled is not None and self._use_machine(compiled)
+
+    def _use_machine(self, compiled: Callable) -> bool:
+        """Evaluate states through the machine code (outputs q̇, q̈, λ, then ``fn``'s outputs)
+        once it agrees with ``fn`` and the array solve at a random state."""
+        n, m = self.n, self.m
+        buf = np.zeros(1 + 2 * n + len(self._p) + 2 + m + 1)
+        buf[1 + 2 * n : 1 + 2 * n + len(self._p)] = self._p
+        rng = np.random.default_rng(11)
+        t0, q, qd = 0.4, rng.uniform(0.2, 0.9, n), rng.uniform(-0.5, 0.5, n)
+        fk = self._fused
+        try:
+            buf[0], buf[1 : 1 + n], buf[1 + n : 1 + 2 * n] = t0, q, qd
+            out = np.array(compiled(buf), dtype=float)
+            v = np.array(fk.fn(t0, *q.tolist(), *qd.tolist(), *self._p), dtype=float)
+            qdd, lam = self.solve(t0, q, qd)
+        except Exception:
+            return False
+        k = 2 * n + m
+        ok = out.shape == (k + v.size,) and np.allclose(out[k:], v, rtol=1e-11, atol=1e-13)
+        ok = ok and np.allclose(out[n : 2 * n], qdd, rtol=1e-9, atol=1e-12)
+        ok = ok and np.allclose(out[2 * n : k], lam, rtol=1e-9, atol=1e-12)
+        if ok:
+            self._machine, self._machine_buf = compiled, buf
+        return bool(ok)
 
     def mass_matrix(
         self, t: float, q: object, qd: object | None = None
@@ -252,7 +303,13 @@ class NumericModel(StreamModel):
         self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
     ) -> tuple[np.ndarray, np.ndarray]:
         """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f
-        (:class:`pfaff.numeric.protocol.DynamicsModel`)."""
+        (:class:`pfaff.numeric.protocol.DynamicsModel`). With machine code and no
+        stabilization: one call of it (q̈ and λ with the kernel's outputs)."""
+        if self._machine is not None and not (alpha or beta or self._full_kkt):
+            self._fused_values(t, q, qd)
+            last = self._machine_last
+            if last is not None:
+                return last[3][: self.n].copy(), last[3][self.n :].copy()
         return self._solve(t, q, qd, alpha, beta)
 
     def _solve(
@@ -392,6 +449,8 @@ class NumericModel(StreamModel):
         self.timings.setdefault("machine_code", time.process_time() - start)
         if compiled is None:
             return py
+        if self._machine is None:
+            self._use_machine(compiled)
         machine = _machine_rhs(compiled, py, n, [*self._p, alpha, beta, *taus])
         if self._prefer_machine is None:  # timed once per model, not at every rescaling
             self._prefer_machine = _faster(py, machine, n) is machine
@@ -400,6 +459,16 @@ class NumericModel(StreamModel):
     def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The fused kernel's flat outputs at a state; non-real values are an error naming t."""
         assert self._fused is not None
+        self._machine_last = None
+        if self._machine is not None:  # one machine-code call: the outputs, q̈ and λ
+            n, m = self.n, self.m
+            buf = self._machine_buf
+            buf[0], buf[1 : 1 + n], buf[1 + n : 1 + 2 * n] = t, q, qd
+            buf[1 + 2 * n : 1 + 2 * n + len(self._p)] = self._p  # (with_parameters copies)
+            out = self._machine(buf)
+            if np.isfinite(out).all():
+                self._machine_last = (t, q.tobytes(), qd.tobytes(), out[n : 2 * n + m])
+                return out[2 * n + m :]
         try:
             v = np.array(self._fused.fn(t, *q.tolist(), *qd.tolist(), *self._p))
         except (ValueError, ArithmeticError) as e:  # math domain error, overflow, division by 0
@@ -467,7 +536,13 @@ class NumericModel(StreamModel):
                 self.check_determined(t, q, qd)  # the precise error when M is the cause
                 raise
         K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-        return self._solve_kkt(K, forcing, -bias, t, full=self._inertia(K, t))
+        full = self._inertia(K, t)
+        last = self._machine_last
+        if not full and last is not None and last[0] == t and last[1] == q.tobytes():
+            if last[2] == qd.tobytes():  # the machine code solved this state with _kkt
+                self._machine_last = None
+                return last[3][: self.n].copy(), last[3][self.n :].copy()
+        return self._solve_kkt(K, forcing, -bias, t, full=full)
 
     def check_determined(self, t: float, q: object, qd: object) -> None:
         """Check that M is positive definite on the admissible velocities at a state.
@@ -788,15 +863,16 @@ def _checked_lists(rhs: list) -> Callable[[float, list], list]:
 def _machine_rhs(compiled: Callable, py: Callable, n: int, fixed: list) -> Callable:
     """The machine-code right-hand side on lists, ``py`` (the generated Python) where it gives
     anything non-finite (M not positive definite, a value out of its domain: ``py`` then takes
-    the slow path or names the error)."""
+    the slow path or names the error). The compiled function's first 2n outputs are [q̇, q̈]."""
     buf = np.empty(1 + 2 * n + len(fixed))
     buf[1 + 2 * n :] = fixed
     isfinite = math.isfinite
+    k = 2 * n
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
-        out = compiled(buf).tolist()
+        out = compiled(buf)[:k].tolist()
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs

@@ -152,6 +152,7 @@ def schur_source(
     cap: str | None = None,
     prefix: str = "v",
     symbolic: bool = False,
+    multipliers: list | None = None,
 ) -> tuple[list[str], list[str]]:
     """Lines (indented for a function body) computing q̈, and the n expressions of q̈.
 
@@ -159,7 +160,8 @@ def schur_source(
     ``acon``), the forcing ``Fs`` and the constraint right-hand side ``cs``; intermediate variables
     are ``{prefix}1, {prefix}2, …``. ``shift``, ``tau`` and ``cap`` as in :func:`schur_solver`.
     ``symbolic``: no Python conditionals (the floor and the cap call ``pick`` and ``capped``), so
-    that the lines also run on symbolic values (:func:`schur_expressions`).
+    that the lines also run on symbolic values (:func:`schur_expressions`). ``multipliers``: a
+    list that receives the m expressions of λ.
 
     Examples
     --------
@@ -199,6 +201,8 @@ def schur_source(
         cap_of = "capped({0}, {1})" if symbolic else "{0} if {0} < {1} else {1}"
         tau = [w.let(cap_of.format(tj, top)) or tj for tj in tau]
     lam = w.solve(w.cholesky(S, tau), r) if m else []
+    if multipliers is not None:
+        multipliers.extend(x if x is not None else "0.0" for x in lam)
     out = []
     for i in range(n):
         acc = _dot([(Z[k][i], lam[k]) for k in range(m)])
@@ -215,7 +219,7 @@ def schur_expressions(
     m: int,
     namespace: dict,
 ) -> list:
-    """q̈ of the floored range-space solve as expressions: :func:`schur_source`'s lines (the same
+    """q̈ and λ (n + m) of the floored range-space solve as expressions: :func:`schur_source`'s lines (the same
     algorithm and floor) run on symbolic ``values`` for the names ``m{s}``, ``a{s}``, ``F{i}``,
     ``c{i}``, ``tau{j}`` and ``cap``; ``namespace`` gives ``sqrt``, ``max``, ``pick(d, tau)`` (the
     floored pivot) and ``capped(tau, top)`` for that algebra.
@@ -224,10 +228,13 @@ def schur_expressions(
     As = [f"a{s}" for s in range(len(acon))]
     Fs, cs = [f"F{i}" for i in range(n)], [f"c{i}" for i in range(m)]
     taus = [f"tau{j}" for j in range(m)]
-    lines, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="cap", symbolic=True)
+    lam: list[str] = []
+    lines, out = schur_source(
+        mass, acon, Ms, As, Fs, cs, tau=taus, cap="cap", symbolic=True, multipliers=lam
+    )
     names = [*Ms, *As, *Fs, *cs, *taus, "cap"]
     src = f"def schur({', '.join(names)}):\n" + "\n".join(lines)
-    src += f"\n    return [{', '.join(out)}]\n"
+    src += f"\n    return [{', '.join(out + lam)}]\n"
     env = dict(namespace)
     exec(compile(src, "<pfaff.smallsolve symbolic>", "exec"), env)  # our own generated code
     return env["schur"](*(values[k] for k in names))
