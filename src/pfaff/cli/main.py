@@ -89,6 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
         "PNG, PDF, SVG, ... from the extension",
     )
     _simulation_options(ring)
+    _animation_options(ring)
     pend = dsub.add_parser("pendulum", help="the Cartesian pendulum (x, y) with its rod constraint")
     _debug_option(pend)
     pend.add_argument("--mass", type=_positive, default=1.0, help="bob mass m (default 1)")
@@ -137,6 +138,7 @@ def _body_demos(dsub: argparse._SubParsersAction) -> None:
         )
         d.add_argument("--json", action="store_true", help="print one JSON object instead of text")
         d.add_argument("--plot", metavar="FILE.png", help="write a figure of the run")
+        _animation_options(d)
 
 
 def _bicycle_demo(dsub: argparse._SubParsersAction) -> None:
@@ -174,12 +176,14 @@ def run_body_demo(args: argparse.Namespace) -> int:
     if args.plot:
         traj.plot(args.plot)
         rep["plot"] = args.plot
+    _write_animation(traj, args, rep)
     if args.json:
         print(json.dumps(rep, indent=1))
     else:
         print(bodydemo.format_body(rep))
-        if args.plot:
-            print(f"Wrote {args.plot}")
+        for key in ("plot", "animate"):
+            if key in rep:
+                print(f"Wrote {rep[key]}")
     return 0 if traj.status == "success" else 3
 
 
@@ -207,9 +211,40 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+# ---- animations (Trajectory.animate): --animate/--frames of `demo ring` and the body demos
+def _animation_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--animate",
+        metavar="FILE.gif",
+        help="write an animation of the run (GIF; MP4 where ffmpeg exists; implies --simulate)",
+    )
+    p.add_argument(
+        "--frames", type=_frame_count, default=200, help="animation frames at most (default 200)"
+    )
+
+
+def _frame_count(s: str) -> int:
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {s!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"needs at least 1 frame, got {v}")
+    return v
+
+
+def _write_animation(traj, args: argparse.Namespace, rep: dict) -> None:
+    if getattr(args, "animate", None):
+        traj.animate(args.animate, frames=args.frames)
+        rep["animate"] = args.animate
+
+
+# ---- end of animations
 def _resolve_simulation(args: argparse.Namespace) -> None:
     """Turn on --simulate when an option that only a simulation uses was given; fill defaults."""
-    given = [k for k in (*SIMULATION_DEFAULTS, "output") if getattr(args, k) is not None]
+    given = [
+        k for k in (*SIMULATION_DEFAULTS, "output", "animate") if getattr(args, k, None) is not None
+    ]
     if args.demo == "pendulum" and args.plot:  # the pendulum's only figure is of a run
         given.append("plot")
     args.simulate = args.simulate or bool(given)
@@ -242,6 +277,11 @@ def check_files(args: argparse.Namespace) -> None:
         from pfaff.results.figures import figure_formats
 
         _check_file("--plot", args.plot, figure_formats(), "figure")
+    if getattr(args, "animate", None):  # also MP4 without ffmpeg
+        from pfaff.results.animation import check_path
+
+        _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
+        check_path(args.animate)
 
 
 def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
@@ -252,6 +292,7 @@ def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, s
     if args.plot:
         traj.plot(args.plot, units=units)
         rep["plot"] = args.plot
+    _write_animation(traj, args, rep)
 
 
 def run_simulation(args: argparse.Namespace) -> int:
@@ -287,7 +328,7 @@ def run_simulation(args: argparse.Namespace) -> int:
         print(json.dumps(rep, indent=1))
     else:
         print(format_simulation(rep))
-        for key in ("output", "plot"):
+        for key in ("output", "plot", "animate"):
             if key in rep:
                 print(f"Wrote {rep[key]}")
     return 0 if traj.status == "success" else 3

@@ -24,6 +24,7 @@ from pfaff.core.symbols import local_qd
 from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
+from pfaff.derive.geometry import build_geometry
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.model import NumericModel
 from pfaff.numeric.streams import Index, StreamCode, StreamKernel
@@ -245,6 +246,7 @@ def build_model(
         solver=solver,
     )
     model.attitudes = attitude_sets(eom)
+    model.geometry = None if constraints_only else build_geometry(eom, values)  # animations
     model._restream = Restream(eom, params, constraints_only)  # for model.with_parameters
     if not constraints_only and model.solver == "range-space":
         start = time.process_time()

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pfaff.core.lazy import LazySeq
 from pfaff.derive.compile import con_streams, dyn_streams, model_parameter_values
 from pfaff.derive.equations import Derivation
+from pfaff.derive.geometry import build_geometry
 from pfaff.derive.memory import check_memory
 from pfaff.numeric.structured import StructuredModel
 
@@ -54,7 +55,7 @@ def structured_model(
     params = tuple(eom.parameters)
     dyn = [dyn_streams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"]
     con = [con_streams(b, params, values) for b in eom.blocks if b.local.kind != "dynamics"]
-    return StructuredModel(
+    model = StructuredModel(
         eom.n,
         eom.m,
         dyn,
@@ -66,6 +67,8 @@ def structured_model(
         p=eom.n - sum(len(f) for f in getattr(eom.system, "families", [])),
         solver=solver,
     )
+    model.geometry = build_geometry(eom, values)  # what Trajectory.animate draws
+    return model
 
 
 def compile_structured(

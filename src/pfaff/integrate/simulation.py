@@ -492,4 +492,5 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         parameters=dict(model.parameters),
         projector=projector if project_output else None,
         switches=list(run.switches),
+        geometry=getattr(model, "geometry", None),  # what Trajectory.animate draws
     )

@@ -76,6 +76,7 @@ class Trajectory:
         self.parameters: dict = fields.get("parameters", {})
         self._projector = fields.get("projector")
         self.switches: list[tuple[float, str]] = list(fields.get("switches", []))
+        self.geometry = fields.get("geometry")  # the model's, for animate (derive/geometry.py)
 
     # ------------------------------------------------------------------ derived quantities
     @property
@@ -170,6 +171,21 @@ class Trajectory:
 
     def _ends(self, i: np.ndarray) -> tuple:
         return self.q[i + 1], self.qd[i + 1], self.qdd[i + 1]
+
+    def _columns_at(self, ts: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """The columns ``cols`` of q at ``ts`` (for animations: no projection, and no copy of
+        the whole run): quintic Hermite, or the nearer reported state inside an interval that
+        holds an MRP shadow-set switch (the coordinates jump there)."""
+        t = self.t
+        i = np.clip(np.searchsorted(t, ts, side="right") - 1, 0, len(t) - 2)
+        h = (t[i + 1] - t[i])[:, None]
+        s = (ts - t[i])[:, None] / h
+        sw = np.sort(np.array([w for w, _ in self.switches], dtype=float))
+        if sw.size:
+            jump = np.searchsorted(sw, t[i + 1], "right") > np.searchsorted(sw, t[i], "right")
+            s[jump] = np.round(s[jump])
+        ends = [a[np.ix_(j, cols)] for j in (i, i + 1) for a in (self.q, self.qd, self.qdd)]
+        return hermite5(s, h, *ends)[0]
 
     __call__ = at
 
@@ -270,6 +286,70 @@ class Trajectory:
         from pfaff.results.figures import plot_trajectory
 
         return plot_trajectory(self, path, units=units)
+
+    def animate(
+        self,
+        path: str | Path,
+        *,
+        frames: int = 200,
+        fps: float = 20.0,
+        links: Any = None,
+        size: float = 4.0,
+        dpi: int = 80,
+        title: str | None = None,
+    ) -> Path:
+        """Write an animation of the motion: a GIF, or an MP4 where ffmpeg exists.
+
+        Particles and the lines between them, rigid bodies as their axes, a family of particles
+        (the ring) as its points and centre; 2-D or 3-D as the model; the title shows t. What
+        is drawn and the link rule: :mod:`pfaff.results.animation`, :mod:`pfaff.derive.geometry`.
+
+        Parameters
+        ----------
+        path : str or Path
+            Ends in ``.gif`` or ``.mp4``; checked (and MP4 refused without ffmpeg) before any
+            work. Written atomically.
+        frames : int, optional
+            At most this many frames (default 200), evenly spaced over the run; memory depends
+            on it, not on the run's length.
+        fps : float, optional
+            Frames per second of the file (default 20).
+        links : sequence of pairs, optional
+            Lines to draw instead of the found ones: pairs of point indices or names
+            (``geometry.names``), ``-1`` or ``"origin"`` for the fixed origin; ``[]`` for none.
+        size : float, optional
+            Width and height in inches (default 4).
+        dpi : int, optional
+            Pixels per inch (default 80: 320 × 320 pixels).
+        title : str, optional
+            Default: the system's name.
+
+        Returns
+        -------
+        Path
+
+        Raises
+        ------
+        OptionError
+            A bad path, extension or option, or MP4 without ffmpeg.
+        StateError
+            The trajectory has no geometry (a model built from matrices) or no states.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib, pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+        >>> traj = pfaff.simulate(model, [1.0], [0.0], (0.0, 1.0))
+        >>> gif = traj.animate(pathlib.Path(tempfile.mkdtemp()) / "swing.gif", frames=3, dpi=30)
+        >>> from PIL import Image
+        >>> Image.open(gif).n_frames
+        3
+        """
+        from pfaff.results.animation import animate
+
+        return animate(
+            self, path, frames=frames, fps=fps, links=links, size=size, dpi=dpi, title=title
+        )
 
 
 def _netcdf_engine() -> str:
