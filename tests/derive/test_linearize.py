@@ -253,3 +253,28 @@ def test_bad_names(pendulum, cartpole) -> None:
         pendulum.linearize({th: 0}, [th], inputs=["F"])
     with pytest.raises(ModelTypeError, match="must be a dict"):
         pendulum.linearize([(th, 0)], [th])
+
+
+# --------------------------------------------------------------------------- rolling disk
+def test_rolling_disk_critical_spin() -> None:
+    """A thin disk (I = m r²/4 about a diameter, m r²/2 about its axis) rolling upright is
+    stable (marginally: no dissipation) above the spin ω_c = √(g/(3r)), i.e. v² > g r/3, and
+    capsizes below. Only the spin rate is given: the dependent rates (ẋ, ż) are computed."""
+    eom = pfaff.models.rolling_disk().equations()
+    x, y, z, psi, th, ph = eom.coordinates
+    r, g = 0.5, 9.81
+    wc = np.sqrt(g / (3 * r))
+
+    def growth(w: float) -> float:
+        op = {x: 0, y: 0, z: r, psi: 0, th: 0, ph: 0, ph.diff(t): w, "m": 1.0, "r": r, "g": g}
+        lin = eom.linearize(op, [x, y, psi, th, ph], [psi, th, ph])
+        assert {0, 1, 2, 4, 7} <= set(lin.ignorable())  # x, y, yaw, spin angle and rate
+        keep = [k for k in range(8) if k not in lin.ignorable()]
+        return float(np.linalg.eigvals(lin.A[np.ix_(keep, keep)]).real.max())
+
+    assert growth(0.999 * wc) > 1e-2
+    assert abs(growth(1.001 * wc)) < 1e-9
+    assert abs(growth(3 * wc)) < 1e-9
+    assert growth(0.0) == pytest.approx(
+        np.sqrt(g / r * 4 / 5), rel=1e-12
+    )  # falling over: m g r / (I + m r²)
