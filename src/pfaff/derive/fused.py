@@ -71,6 +71,9 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
     acon = [tuple(x) for x in code["acon"]]
     fn, vfn, _, efn = fns
     rfn = _rhs_function(code["body"], code["outs"], mass, acon, n, m, len(eom.parameters))
+    rfn_aug = _rhs_function(
+        code["body"], code["outs"], mass, acon, n, m, len(eom.parameters), augmented=True
+    )
     cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
     index, source = [], []
@@ -95,6 +98,7 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         tuple(i for i, _ in acon),
         tuple(j for _, j in acon),
         _llvm_factory(eom, key),
+        rfn_aug,
     ), status
 
 
@@ -406,10 +410,22 @@ def _llvm_rhs(mass: list, acon: list, exprs: list, n: int, m: int, args: list) -
 
 
 def _rhs_function(
-    body: list[str], outs: list[str], mass: list, acon: list, n: int, m: int, n_params: int
+    body: list[str],
+    outs: list[str],
+    mass: list,
+    acon: list,
+    n: int,
+    m: int,
+    n_params: int,
+    augmented: bool = False,
 ) -> Callable | None:
     """``rfn`` (see :class:`FusedKernel`): the shared kernel code, the constraint rows
-    c = −(Ȧq̇ + ḃ) − 2α(A q̇ + b) − β² f, and the floored Schur solve, in one function."""
+    c = −(Ȧq̇ + ḃ) − 2α(A q̇ + b) − β² f, and the floored Schur solve, in one function.
+
+    ``augmented`` (``rfn_aug``, for a singular M such as quaternion coordinates give): the solve
+    of (M + ρAᵀA) q̈ = Q − h + ρAᵀc + Aᵀλ, A q̈ = c, which has the same q̈ and λ (A q̈ = c makes
+    the added terms equal) and a positive definite matrix where M is definite on null(A); ρ is
+    the argument ``_rho`` of ``make`` after the floor's."""
     nM, nA = len(mass), len(acon)
     off = nM + nA
     Ms, As = [f"_m{k}" for k in range(nM)], [f"_a{k}" for k in range(nA)]
@@ -423,13 +439,16 @@ def _rhs_function(
         nb, b, f = outs[off + n + i], outs[off + n + m + i], outs[off + n + 2 * m + i]
         gi = " + ".join(g[i]) or "0.0"
         lines.append(f"{cs[i]} = ({nb}) - 2*_alpha*({gi} + ({b})) - _beta**2*({f})")
+    if augmented:
+        mass, Ms, Fs = _augment(mass, acon, Ms, As, Fs, cs, lines)
     schur, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
     lines += [ln.strip() for ln in schur]
     ys = ", ".join(f"_y{i}" for i in range(2 * n))
     params = [f"_p{k}" for k in range(n_params)]
+    rho = ["_rho"] if augmented else []
     src = "\n".join(
         [
-            f"def make({', '.join([*params, '_alpha', '_beta', *taus, '_cap'])}, _slow):",
+            f"def make({', '.join([*params, '_alpha', '_beta', *taus, '_cap', *rho])}, _slow):",
             "    def rhs(_t, _y):",
             f"        {ys}, = _y",
             "        try:",
@@ -446,3 +465,33 @@ def _rhs_function(
     except (SyntaxError, RecursionError):  # something the printer cannot write: the array path
         return None
     return namespace["make"]
+
+
+def _augment(
+    mass: list, acon: list, Ms: list, As: list, Fs: list, cs: list, lines: list[str]
+) -> tuple[list, list[str], list[str]]:
+    """Lines of M + ρAᵀA and Q − h + ρAᵀc (appended to ``lines``); their pattern and names."""
+    rows: dict[int, list[tuple[int, str]]] = {}
+    for k, (i, j) in enumerate(acon):
+        rows.setdefault(i, []).append((j, As[k]))
+    extra: dict[tuple[int, int], list[str]] = {}
+    for entries in rows.values():
+        for j1, a1 in entries:
+            for j2, a2 in entries:
+                if j1 <= j2:
+                    extra.setdefault((j1, j2), []).append(f"{a1}*{a2}")
+    given = dict(zip(mass, Ms, strict=True))
+    pattern = sorted(set(given) | set(extra))
+    names = []
+    for s, key in enumerate(pattern):
+        name = f"_mt{s}"
+        terms = " + ".join(extra.get(key, [])) or "0.0"
+        lines.append(f"{name} = {given.get(key, '0.0')} + _rho*({terms})")
+        names.append(name)
+    forcing = []
+    for j, F in enumerate(Fs):
+        terms = [f"{a}*{cs[i]}" for i, entries in rows.items() for jj, a in entries if jj == j]
+        name = f"_Ft{j}"
+        lines.append(f"{name} = {F} + _rho*({' + '.join(terms) or '0.0'})")
+        forcing.append(name)
+    return pattern, names, forcing

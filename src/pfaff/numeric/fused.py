@@ -57,6 +57,9 @@ class FusedKernel:
         outputs]`` on the flat array ``x = [t, q, q̇, params, alpha, beta, taus, cap]``, or None
         where it cannot (no LLVM in this SymEngine); ``llvm(build=False)`` only loads it from the
         on-disk cache. Non-finite outputs mean "take ``rfn``" (M not positive definite).
+    rfn_aug : callable or None
+        ``rfn`` for a singular M (quaternion coordinates): the same q̈ from M + ρAᵀA;
+        ``make(*params, alpha, beta, *taus, cap, rho, slow)``.
     """
 
     fn: Callable
@@ -71,6 +74,7 @@ class FusedKernel:
     arows: tuple[int, ...]
     acols: tuple[int, ...]
     llvm: Callable[..., Callable | None] | None = None
+    rfn_aug: Callable | None = None
 
     def entries(self, K: np.ndarray) -> list[float]:
         """The M and A entries of an assembled K, as the arguments of ``cfn``."""

@@ -130,6 +130,7 @@ class NumericModel(StreamModel):
         # M not safely positive definite at the first state of the run (check_determined): the
         # range-space solve (M⁻¹) is unusable, the whole augmented matrix is solved by LU
         self._full_kkt = False
+        self._rho = 0.0  # M + ρAᵀA in the generated solve when M is singular (_augmentation)
 
     def use_fused(self, fused: FusedKernel) -> bool:
         """Evaluate through ``fused`` from now on, if it works at a random state.
@@ -149,7 +150,7 @@ class NumericModel(StreamModel):
             if v.dtype.kind != "f" or not np.isfinite(v).all():
                 raise ValueError("the fused kernel is not finite and real at the test state")
             self._fused = dataclasses.replace(fused, rfn=None)
-            slow = self.solve(t0, q, qd)[0]
+            slow = self._reference_solve(t0, q, qd)[0]
             fast = None
             if fused.rfn is not None:
                 taus = [0.0] * (self.m + 1)  # no floor
@@ -166,6 +167,15 @@ class NumericModel(StreamModel):
             if compiled is not None:
                 self._use_machine(compiled)
         return True
+
+    def _reference_solve(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """q̈, λ by the model's solver, or by LU on the whole augmented matrix where M is
+        singular (quaternion coordinates): the reference the generated code is checked against."""
+        try:
+            return self._solve(t, q, qd)
+        except PfaffError:
+            K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+            return self._solve_kkt(K, forcing, -bias, t, full=True)
 
     def compile_machine_code(self) -> bool:
         """Compile (or load from the on-disk cache) the machine code of a small model now, so
@@ -200,7 +210,7 @@ class NumericModel(StreamModel):
             buf[0], buf[1 : 1 + n], buf[1 + n : 1 + 2 * n] = t0, q, qd
             out = np.array(compiled(buf), dtype=float)
             v = np.array(fk.fn(t0, *q.tolist(), *qd.tolist(), *self._p), dtype=float)
-            qdd, lam = self.solve(t0, q, qd)
+            qdd, lam = self._reference_solve(t0, q, qd)
         except Exception:
             return False
         k = 2 * n + m
@@ -438,6 +448,8 @@ class NumericModel(StreamModel):
             qdd = self._solve(t, y[:n], y[n:], alpha, beta, floor=floor, scales=scales)[0]
             return yl[n:] + qdd.tolist()
 
+        if self._full_kkt and self._rho and fk.rfn_aug is not None:  # M singular: M + ρAᵀA
+            return fk.rfn_aug(*self._p, alpha, beta, *([0.0] * (self.m + 1)), self._rho, slow)
         if self._full_kkt or fk.rfn is None:
             return slow
         # no reference sizes: no floor (a singular S then takes the array path)
@@ -578,8 +590,27 @@ class NumericModel(StreamModel):
         else:
             self._full_kkt = False  # the test below may raise: no stale mode left behind
             self._full_kkt = self._inertia(K, t)
+            self._rho = self._augmentation(K, t, q, qd) if self._full_kkt else 0.0
         if self.m:
             self.solve(t, q, qd)
+
+    def _augmentation(self, K: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        """ρ of the generated solve with M + ρAᵀA (``rfn_aug``) for a singular M, checked
+        against the LU solve of the whole augmented matrix at this state; 0 when unusable."""
+        fk, n = self._fused, self.n
+        if fk is None or fk.rfn_aug is None or not self.m:
+            return 0.0
+        M, A = K[:n, :n], K[n:, :n]
+        rho = float(np.abs(np.diag(M)).max() / max((A * A).sum(axis=0).max(), 1e-300))
+        try:
+            fn = fk.rfn_aug(*self._p, 0.0, 0.0, *([0.0] * (self.m + 1)), rho, lambda t, y: None)
+            fast = fn(t, [*q.tolist(), *qd.tolist()])
+            slow = self._solve(t, q, qd)[0]
+        except Exception:
+            return 0.0
+        if fast is None or not np.allclose(fast[n:], slow, rtol=1e-9, atol=1e-12):
+            return 0.0
+        return rho
 
     def _inertia(self, K: np.ndarray, t: float) -> bool:
         """The test of :meth:`check_determined` on a dense K: True when M is not safely definite.
