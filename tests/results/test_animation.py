@@ -175,6 +175,19 @@ def test_frames_between_reports_are_interpolated(pendulum_model):
     np.testing.assert_allclose(f.points, pendulum_model.geometry.points(q), atol=1e-7)
 
 
+def test_frames_across_mrp_switches_follow_the_motion(body):
+    system, model = body
+    att = system.bodies[0].attitude
+    q0 = att.from_dcm(np.eye(3))
+    qd0 = att.rates(q0, [0.01, 1.0, 0.0])  # near the intermediate axis: it flips
+    run = pfaff.simulate(model, q0, qd0, (0.0, 8.0))
+    assert run.switches  # |σ| passed 1: the coordinates jump to the shadow set
+    f = sample_frames(run, 60)
+    ref = pfaff.simulate(model, q0, qd0, (0.0, 8.0), t_eval=f.t)
+    _, dcm = model.geometry.bodies(ref.q, ref.t)
+    np.testing.assert_allclose(f.dcm, dcm, atol=1e-2)
+
+
 def test_scene_draws_the_sampled_positions(double_model):
     run = pfaff.simulate(double_model, [1.0, 0.5], [0.0, 0.0], (0.0, 0.5))
     data = sample_frames(run, 3)

@@ -10,8 +10,8 @@ to its first drawn member, and the points where forces act as crosses. Planar sy
 
 At most ``frames`` frames (default 200), at evenly spaced times over the run: the coordinates the
 geometry reads are interpolated there (quintic Hermite, from q, q̇, q̈ of the reported states; the
-state before or after an MRP shadow-set switch, whichever is nearer, inside an interval holding
-one), so memory and time depend on ``frames`` and on the drawn points (a few thousand at most),
+Taylor polynomial of the nearer state inside an interval holding an MRP shadow-set switch, where
+the coordinates jump), so memory and time depend on ``frames`` and on the drawn points (a few thousand at most),
 never on the run's length or the model's size. A GIF's frames are kept as 8-bit palette images
 (about width × height bytes each) until written; an MP4 streams to ffmpeg. The file is written
 atomically: nothing half-written, an existing file untouched on failure.
@@ -361,7 +361,7 @@ class _Scene:
         kinds = np.array(self.geo.kinds)
         styles = (
             ("particle", {"marker": "o", "ms": 6, "color": "tab:blue"}),
-            ("family", {"marker": ".", "ms": 3, "color": "tab:blue"}),
+            ("family", {"marker": ".", "ms": _dot_size(len(kinds)), "color": "tab:blue"}),
             ("force", {"marker": "x", "ms": 6, "color": "0.3"}),
         )
         self.markers = [
@@ -403,6 +403,11 @@ class _Scene:
             if self.d == 3 and hasattr(a, "do_3d_projection"):
                 a.do_3d_projection()
             self.ax.draw_artist(a)
+
+
+def _dot_size(count: int) -> float:
+    """Marker size of a family's points: smaller as they get denser."""
+    return 8.0 if count <= 16 else 5.0 if count <= 128 else 3.0 if count <= 512 else 1.5
 
 
 def _set(artist: Any, xyz: np.ndarray, d: int) -> None:

@@ -174,18 +174,22 @@ class Trajectory:
 
     def _columns_at(self, ts: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """The columns ``cols`` of q at ``ts`` (for animations: no projection, and no copy of
-        the whole run): quintic Hermite, or the nearer reported state inside an interval that
-        holds an MRP shadow-set switch (the coordinates jump there)."""
+        the whole run): quintic Hermite; inside an interval that holds an MRP shadow-set switch
+        (the coordinates jump there), the Taylor polynomial q + q̇Δ + q̈Δ²/2 of the nearer end."""
         t = self.t
         i = np.clip(np.searchsorted(t, ts, side="right") - 1, 0, len(t) - 2)
         h = (t[i + 1] - t[i])[:, None]
         s = (ts - t[i])[:, None] / h
+        ends = [a[np.ix_(j, cols)] for j in (i, i + 1) for a in (self.q, self.qd, self.qdd)]
+        q = hermite5(s, h, *ends)[0]
         sw = np.sort(np.array([w for w, _ in self.switches], dtype=float))
         if sw.size:
             jump = np.searchsorted(sw, t[i + 1], "right") > np.searchsorted(sw, t[i], "right")
-            s[jump] = np.round(s[jump])
-        ends = [a[np.ix_(j, cols)] for j in (i, i + 1) for a in (self.q, self.qd, self.qdd)]
-        return hermite5(s, h, *ends)[0]
+            left = s < 0.5
+            qe, ve, ae = (np.where(left, ends[k], ends[k + 3]) for k in range(3))
+            near = np.where(left, s, s - 1) * h  # Δ from the nearer end
+            q[jump] = (qe + ve * near + ae * near**2 / 2)[jump]
+        return q
 
     __call__ = at
 
