@@ -638,9 +638,12 @@ class ModelLinearizer:
         independent: object,
         independent_speeds: object = None,
         inputs: object = (),
+        values: dict[str, float] | None = None,
     ) -> Linearization:
+        """The linearization at (t0, q, q̇) with the parameter ``values`` (default: those
+        the model was compiled with; a model made by ``with_parameters`` passes its own)."""
         coords = self.eom.coordinates
-        op: dict = {t: float(t0), **self.values}
+        op: dict = {t: float(t0), **(self.values if values is None else values)}
         op.update({c: float(v) for c, v in zip(coords, q, strict=True)})
         op.update({speed(c): float(v) for c, v in zip(coords, qd, strict=True)})
         return linearize(self.eom, op, independent, independent_speeds, inputs)

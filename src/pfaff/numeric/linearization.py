@@ -337,4 +337,5 @@ def linearize_model(
     t = real_number(t, "t")
     q = real_vector(q, "q", model.n, model.coordinate_names)
     qd = real_vector(qd, "qd", model.n, model.coordinate_names)
-    return source(t, q, qd, independent, independent_speeds, inputs)
+    values = dict(model.parameters)  # the model's own: with_parameters shares the source
+    return source(t, q, qd, independent, independent_speeds, inputs, values=values)
