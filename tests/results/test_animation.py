@@ -17,7 +17,7 @@ import pfaff
 from pfaff.attitude import dcm_from
 from pfaff.cli.main import main
 from pfaff.derive.geometry import MAX_POINTS, build_geometry
-from pfaff.errors import OptionError, StateError
+from pfaff.errors import OptionError, ParameterError, StateError
 from pfaff.results import animation
 from pfaff.results.animation import sample_frames
 from pfaff.results.trajectory import Trajectory
@@ -149,6 +149,10 @@ def test_geometry_pickles_and_takes_new_parameters(pendulum_model):
     longer = geo.with_parameters({"L": 3.0})
     np.testing.assert_allclose(longer.points([0.0]), [[0.0, -3.0]], atol=1e-15)
     assert geo.parameters["L"] == 2.0  # unchanged
+    with pytest.raises(ParameterError, match="unknown parameter `l`"):
+        geo.with_parameters({"l": 3.0})
+    with pytest.raises(StateError, match="must have 1 coordinates"):
+        geo.points([0.0, 1.0])
 
 
 def test_no_geometry_without_particles_or_bodies():

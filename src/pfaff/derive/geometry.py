@@ -37,6 +37,7 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from pfaff.core.errors import ParameterError, StateError
 from pfaff.core.symbols import local_q, t
 
 if TYPE_CHECKING:
@@ -164,6 +165,8 @@ class Geometry:
         values = self._values.copy()
         index = {p.name: i for i, p in enumerate(self._params)}
         for key, v in parameters.items():
+            if str(key) not in index:
+                raise ParameterError(f"unknown parameter `{key}` (the model's: {', '.join(index)})")
             values[index[str(key)]] = float(v)
         new._values = values
         return new
@@ -208,7 +211,7 @@ class Geometry:
         """q's columns that the geometry reads; q has n columns or already only those."""
         qa = np.asarray(q, dtype=float)
         if qa.ndim == 0 or qa.shape[-1] not in (self.n, len(self.columns)):
-            raise ValueError(
+            raise StateError(
                 f"`q` must have {self.n} coordinates (or the {len(self.columns)} of `columns`) "
                 f"in its last axis, got shape {qa.shape}"
             )
