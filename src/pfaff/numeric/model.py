@@ -800,6 +800,10 @@ class NumericModel(StreamModel):
         model.attitudes, model._restream = self.attitudes, self._restream
         model.timings = dict(self.timings)
         model._fused, model._prefer_machine = self._fused, self._prefer_machine  # shared code
+        if self._machine is not None:  # checked once: its buffer takes the values at each call
+            model._machine, model._machine_buf = self._machine, self._machine_buf.copy()
+        geometry = getattr(self, "geometry", None)  # what animations draw (derive.geometry)
+        model.geometry = geometry.with_parameters(new) if geometry is not None else None
         return model
 
 

@@ -6,8 +6,8 @@ derive and compile the file once per process and give each run its values at run
 first task is a probe of two runs: its timing sets the batch size, so that each task lasts at
 least :data:`TASK_SECONDS` (scheduling costs about a millisecond per task) and the sweep still
 makes several tasks per worker to balance the load. Dask reschedules the tasks of a worker that
-dies; a batch whose worker died :data:`ALLOWED_FAILURES` times is split into single runs, and a
-run that still kills its worker is reported failed.
+dies; the runs of a batch that killed its worker more than Dask allows (``KilledWorker``) are run
+again at the end, one at a time, and a run that still kills its worker is reported failed.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import socket
 import sys
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -32,7 +33,6 @@ from pfaff.sweep.worker import SweepSpec, run_batch
 TASK_SECONDS = 0.1  # shortest task (Dask's overhead is ~1 ms per task)
 LONGEST_TASK = 2.0  # longest task aimed at when the sweep is large (load balance, progress)
 TASKS_PER_WORKER = 4
-ALLOWED_FAILURES = 3  # distributed's default "allowed-failures": KilledWorker after that
 SAMPLES = 201
 SYNC = ("synchronous", "sync")
 PASSED = ("t_end", "samples")  # [simulate] keys the sweep uses itself, not pfaff.simulate
@@ -268,6 +268,8 @@ class _client:
                 f"'synchronous' or a distributed.Client, got {s!r:.60}"
             )
         try:
+            if isinstance(s, str):
+                _reachable(s)
             client = Client(s, timeout=30, set_as_default=False)
         except OSError as e:
             self.__exit__()
@@ -283,41 +285,69 @@ class _client:
                 pass
 
 
+def _reachable(address: str, timeout: float = 5.0) -> None:
+    """Fail at once (OSError) when nothing listens at a ``tcp://host:port`` address, instead of
+    after the client's retries for its whole timeout."""
+    scheme, _, rest = address.rpartition("://")
+    host, _, port = rest.rpartition(":")
+    if scheme not in ("", "tcp") or not host or not port.isdigit():
+        return  # another protocol or form: the client says what is wrong
+    with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+        pass
+
+
 def _distributed(client: Any, spec: SweepSpec, results: Results, bar: Any) -> dict[str, Any]:
-    """The probe task, then the rest in batches, as they complete; dead workers' batches split."""
+    """A probe task of two runs, then the rest in batches sized on its timing, results taken as
+    they complete; then, each alone on the cluster, the runs of the batches that killed their
+    workers more often than Dask allows (a run that still kills its worker is reported failed)."""
     from distributed import as_completed
 
     n = spec.grid.size
+    futures: dict[Any, list[int]] = {}
+    pending = as_completed(loop=client.loop)
+    suspects: list[int] = []
+
+    def submit(indices: list[int]) -> None:
+        f = client.submit(run_batch, spec, indices, pure=False)
+        futures[f] = indices
+        pending.add(f)
+
     probe = list(range(min(2, n)))
-    out = client.submit(run_batch, spec, probe, pure=False).result()
-    bar.update(results.add(out))
-    workers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})))
-    batch = batch_size(float(np.nanmin(out["seconds"][-1:])), n - len(probe), workers)
-    futures = {
-        client.submit(run_batch, spec, b, pure=False): b
-        for b in _chunks(range(len(probe), n), batch)
-    }
-    pending = as_completed(futures, loop=client.loop)
+    submit(probe)
+    workers, batch = 1, 0
     for fut in pending:
         indices = futures.pop(fut)
-        try:
-            out = fut.result()
-        except Exception as e:
-            if type(e).__name__ != "KilledWorker":
-                for f in futures:
-                    f.cancel()
-                raise
-            if len(indices) == 1:
-                results.fail(indices, f"the worker process died running it ({e})")
-                bar.update(1)
-                continue
-            for i in indices:  # find the run that kills its worker: one task each
-                f = client.submit(run_batch, spec, [i], pure=False)
-                futures[f] = [i]
-                pending.add(f)
-            continue
-        bar.update(results.add(out))
+        out = _result(fut, client, futures)
+        if out is None:
+            suspects += indices
+        else:
+            bar.update(results.add(out))
+        if batch == 0:  # the probe is back: the rest in batches
+            workers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})))
+            seconds = float(out["seconds"][-1]) if out is not None else TASK_SECONDS
+            batch = batch_size(seconds, n - len(probe), workers)
+            for b in _chunks(range(len(probe), n), batch):
+                submit(b)
+    for i in suspects:  # alone: no other task dies with its worker
+        out = _result(client.submit(run_batch, spec, [i], pure=False), client, {})
+        if out is None:
+            results.fail([i], "its worker process died each time it ran (a crash of Python)")
+            bar.update(1)
+        else:
+            bar.update(results.add(out))
     return {"scheduler": str(client.scheduler.address), "workers": workers, "batch": batch}
+
+
+def _result(fut: Any, client: Any, others: dict) -> dict[str, Any] | None:
+    """A task's output; None when its workers died (``KilledWorker``); other errors raised, the
+    ``others`` cancelled."""
+    try:
+        return fut.result()
+    except Exception as e:
+        if type(e).__name__ == "KilledWorker":
+            return None
+        client.cancel(list(others))
+        raise
 
 
 def batch_size(seconds: float, runs: int, workers: int) -> int:

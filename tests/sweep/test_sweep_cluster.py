@@ -1,0 +1,130 @@
+"""pfaff.sweep on Dask: a local cluster, an existing one by address, a worker killed mid-sweep,
+a run that kills its worker. Slow: each cluster takes seconds to start."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import pfaff
+
+pytestmark = pytest.mark.slow
+
+VARY = {"L": np.linspace(0.5, 2.0, 4), "q0.theta": np.linspace(0.1, 1.5, 6)}
+
+
+def local_cluster(n: int = 2, **config: object):
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set(config):
+        return LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    cl = local_cluster(2)
+    yield cl
+    cl.close()
+
+
+def same_runs(a, b) -> None:
+    assert (a.status.values == b.status.values).all()
+    np.testing.assert_allclose(a.q.values, b.q.values, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.qd.values, b.qd.values, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.energy_error.values, b.energy_error.values, rtol=1e-6, atol=1e-15)
+
+
+def test_default_local_cluster_matches_this_process(pendulum):
+    ds = pfaff.sweep(pendulum, VARY, workers=2, progress=False)
+    ref = pfaff.sweep(pendulum, VARY, scheduler="synchronous")
+    assert ds.attrs["workers"] == 2 and ds.attrs["scheduler"].startswith("tcp://")
+    assert (ds.status == "success").all()
+    same_runs(ds, ref)
+
+
+def test_existing_cluster_by_address_and_client(cluster, cartesian):
+    from distributed import Client
+
+    vary = {"g": [9.81, 1.62, 3.7], "qd0.x": [0.0, 0.5, 1.0, 2.0]}
+    ref = pfaff.sweep(cartesian, vary, scheduler="synchronous")
+    ds = pfaff.sweep(cartesian, vary, scheduler=cluster.scheduler_address, progress=False)
+    same_runs(ds, ref)
+    np.testing.assert_allclose(ds.multipliers.values, ref.multipliers.values, rtol=1e-10)
+    with Client(cluster) as client:  # a client of the caller's: used, left open
+        ds = pfaff.sweep(cartesian, vary, scheduler=client, progress=False)
+        assert client.status == "running"
+    same_runs(ds, ref)
+
+
+def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum):
+    from distributed import Client
+
+    vary = {"L": np.linspace(0.5, 2.0, 6), "q0.theta": np.linspace(0.1, 1.5, 4)}
+    t_end = 40.0
+    ref = pfaff.sweep(pendulum, vary, t_end=t_end, scheduler="synchronous")
+    with Client(cluster) as client:
+        before = client.run(os.getpid)
+        killed: dict[str, float] = {}
+
+        def kill_one_when_busy() -> None:
+            start = time.monotonic()
+            while time.monotonic() - start < 60:
+                busy = [a for a, tasks in client.processing().items() if tasks and a in before]
+                if busy and time.monotonic() - start > 1.0:  # past the probe: batches running
+                    os.kill(before[busy[0]], signal.SIGKILL)
+                    killed["at"] = time.monotonic()
+                    return
+                time.sleep(0.05)
+
+        killer = threading.Thread(target=kill_one_when_busy)
+        killer.start()
+        ds = pfaff.sweep(pendulum, vary, t_end=t_end, scheduler=client, progress=False)
+        done = time.monotonic()
+        killer.join()
+        assert "at" in killed and killed["at"] < done  # killed mid-sweep
+        client.wait_for_workers(2, timeout=60)
+        after = client.run(os.getpid)
+    assert set(before.values()) != set(after.values())  # the nanny started a new worker
+    assert (ds.status == "success").all()
+    same_runs(ds, ref)
+
+
+def test_a_run_that_kills_its_worker_is_a_failed_run(pendulum):
+    """Every worker gets a plugin that kills the process at L = 1.5: that run alone fails."""
+    from distributed import Client
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class Crash(WorkerPlugin):
+        def setup(self, worker):
+            from pfaff.sweep import worker as w  # (pfaff.sweep is the function)
+
+            real = w._run
+
+            def _run(entry, spec, i):
+                if spec.grid.point(i)["L"] == 1.5:
+                    os._exit(1)
+                return real(entry, spec, i)
+
+            w._run = _run
+
+    cl = local_cluster(2, **{"distributed.scheduler.allowed-failures": 1})
+    try:
+        with Client(cl) as client:
+            client.register_plugin(Crash())
+            vary = {"L": [0.5, 1.0, 1.5, 2.0]}  # a probe of two, then a batch of the other two
+            ds = pfaff.sweep(pendulum, vary, t_end=1.0, scheduler=client, progress=False)
+    finally:
+        cl.close()
+    assert ds.status.values.tolist() == ["success", "success", "failed", "success"]
+    assert "worker process died" in str(ds.message.sel(L=1.5).values)
+    assert np.isfinite(ds.q.sel(L=2.0)).all() and np.isnan(ds.q.sel(L=1.5)).all()
