@@ -21,10 +21,16 @@ raises :class:`ExpressionError` naming the construct. Integers stay exact: ``1/2
 ``Rational(1, 2)``.
 
 The work is bounded too. Length, characters and bracket depth are checked by one linear scan
-before parsing; the walk over the tree is iterative; and whatever SymPy would evaluate with exact
+before parsing; the walk over the tree is iterative; whatever SymPy would evaluate with exact
 arithmetic (a power of a number, the root of a number, a product of roots, ``exp(c*log(b))``) is
 sized first, so that ``10**10**10`` or ``sqrt(7**1000 + 1)`` is refused at once instead of running
-for minutes (SymPy takes seconds for the square root of a 2000-digit integer).
+for minutes; and every numeric value built stays below 10**1000 in magnitude, since SymPy needs
+precision in proportion to it (``sin(cosh(10**6))`` takes it 25 s). A failure inside SymPy becomes
+an :class:`ExpressionError`.
+
+What is not bounded: SymPy's assumption queries on symbols not declared real can be slow on
+crafted input (``abs(cosh((x + a + b)**12))`` takes seconds, larger powers far longer); with real
+symbols they are instant. Untrusted files are best parsed with real symbols, or under a time limit.
 """
 
 from __future__ import annotations
@@ -51,6 +57,7 @@ __all__ = [
     "MAX_DIGITS",
     "MAX_EXPONENT",
     "MAX_INT_DIGITS",
+    "MAX_NAME_LENGTH",
     "MAX_NODES",
     "MAX_ROOT_DIGITS",
     "RESERVED_NAMES",
@@ -159,6 +166,7 @@ _REFUSED_CONSTANTS: dict[type, str] = {
 _BAD_CHARACTER = re.compile(r"[^\t\n\r\x20-\x7e]")
 _BRACKET = re.compile(r"[][(){}]")
 _UNDEFINED = (sp.nan, sp.zoo, sp.oo, -sp.oo)
+_LARGEST = sp.Integer(10) ** MAX_DIGITS
 _shortrepr = reprlib.Repr()
 _shortrepr.maxstring = _shortrepr.maxother = 40
 
@@ -544,8 +552,15 @@ class _Builder:
             combine, node, extra = tasks.pop()
             if combine is None:
                 self.visit(node, tasks, values)
-            else:
+                continue
+            try:
                 combine(node, extra, values)
+            except ExpressionError:
+                raise
+            except Exception as e:  # SymPy's own evaluation failed (an overflow, a bug)
+                raise self.error(
+                    node, f"SymPy could not evaluate {self.segment(node)} ({type(e).__name__})"
+                ) from e
         ((expr, _),) = values
         if expr.has(*_UNDEFINED):
             raise self.error(root, "the expression is infinite or undefined (a division by zero?)")
@@ -607,6 +622,10 @@ class _Builder:
             raise self.error(
                 node, f"{self.segment(node)} is a number of more than {MAX_DIGITS} digits"
             )
+        if expr.is_number and not expr.is_Rational:
+            self.check_magnitude(node, expr)
+        elif (expr.is_Mul or expr.is_Add) and expr.args[0].is_Float:  # 1e300**9 * x
+            self.check_magnitude(node, expr.args[0])
         if expr.is_Pow and expr.exp.is_Number and abs(expr.exp) > MAX_EXPONENT:
             raise self.error(
                 node,
@@ -725,10 +744,14 @@ class _Builder:
         raise self.unknown(func, name, "function")
 
     def dot(self, node: ast.Call) -> sp.Expr:
-        """``dot(q)``: the time derivative of the coordinate ``q``."""
+        """``dot(q)``: the time derivative of the coordinate ``q`` (or of a family member
+        ``theta[k+1]``)."""
         if len(node.args) != 1:
             raise self.error(node, f"dot() takes 1 argument (a coordinate), got {len(node.args)}")
         arg = node.args[0]
+        if isinstance(arg, ast.Subscript) and self.subscripts:  # dot(theta[k+1]): a member
+            member = self.subscript(arg)
+            return sp.Derivative(member, _T)
         if not isinstance(arg, ast.Name):
             raise self.error(arg, f"dot() takes the name of a coordinate, not {self.segment(arg)}")
         q = self.declared(arg)
@@ -809,26 +832,53 @@ class _Builder:
         return sp.Pow(base, exponent)
 
     def check_power(self, node: ast.expr, base: sp.Expr, exponent: sp.Expr) -> None:
-        """Refuse a power whose evaluation would make a huge number or factor a large one."""
-        if exponent.is_Number:
-            if abs(exponent) > MAX_EXPONENT:
-                raise self.error(
-                    node,
-                    f"the exponent {_shortrepr.repr(str(exponent))} is larger than {MAX_EXPONENT}",
-                )
-            exact, roots = _content(base)
-            size = (exact + roots) * abs(float(exponent))
-            if size > MAX_DIGITS:
-                raise self.error(
-                    node,
-                    f"the power would be a number of about {size:.0f} digits (at most {MAX_DIGITS})",
-                )
-            if exponent.is_Rational and not exponent.is_Integer and exact + roots > MAX_ROOT_DIGITS:
-                raise self.error(
-                    node, f"the root of a number of more than {MAX_ROOT_DIGITS} digits is not taken"
-                )
+        """Refuse a power whose evaluation would make a huge number or factor a large one.
+
+        The numeric part of the exponent is sized: the exponent itself, or its constant term
+        (SymPy splits ``2**(x + n)`` into ``2**n * 2**x`` when it extracts contents).
+        """
+        number = exponent if exponent.is_Number else exponent.as_coeff_Add()[0]
+        if number.is_Number and number != 0:
+            self.check_exponent(node, base, number)
         if base is sp.E:
             self.check_exp(node, exponent)
+
+    def check_exponent(self, node: ast.expr, base: sp.Expr, number: sp.Number) -> None:
+        """Refuse ``base**number`` if the number is large, or the power or root costly."""
+        if abs(number) > MAX_EXPONENT:
+            shown = _shortrepr.repr(str(number))
+            raise self.error(node, f"the exponent {shown} is larger than {MAX_EXPONENT}")
+        exact, roots = _content(base)
+        size = (exact + roots) * abs(float(number))
+        if size > MAX_DIGITS:
+            raise self.error(
+                node,
+                f"the power would be a number of about {size:.0f} digits (at most {MAX_DIGITS})",
+            )
+        if number.is_Rational and number.q > MAX_EXPONENT:
+            raise self.error(node, f"the root of index {number.q} is larger than {MAX_EXPONENT}")
+        if number.is_Rational and not number.is_Integer and exact + roots > MAX_ROOT_DIGITS:
+            raise self.error(
+                node, f"the root of a number of more than {MAX_ROOT_DIGITS} digits is not taken"
+            )
+
+    def check_magnitude(self, node: ast.expr, expr: sp.Expr) -> None:
+        """Refuse a numeric value that is not real, or beyond 10**MAX_DIGITS in magnitude.
+
+        A function of a huge number costs SymPy precision in proportion to its size (it takes
+        sin(cosh(10**6)) 25 s to find the sign), and functions of complex numbers grow into
+        logarithms of square roots; bounding every numeric value as it is built keeps the next
+        one cheap. The result would be refused as complex anyway.
+        """
+        value = expr.evalf(15)
+        if value.has(sp.I):
+            raise self.error(node, f"{self.segment(node)} is not a real number ({value})")
+        if not (value.is_Number and value.is_finite and abs(value) <= _LARGEST):
+            raise self.error(
+                node,
+                f"{self.segment(node)} is a number of magnitude beyond 10**{MAX_DIGITS} "
+                "(or one that cannot be evaluated)",
+            )
 
     def check_exp(self, node: ast.expr, arg: sp.Expr) -> None:
         """Refuse ``exp(c*log(b) + ...)``, which SymPy turns into ``b**c * ...``, if too large."""
