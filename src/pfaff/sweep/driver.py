@@ -101,8 +101,12 @@ def sweep(
     -----
     With the local cluster (processes are started with ``spawn``), call ``sweep`` under
     ``if __name__ == "__main__":`` in a script. Workers of an existing cluster need pfaff
-    installed. Parameters change at run time, so the file is compiled once per worker process;
-    see :meth:`pfaff.NumericModel.with_parameters` for what that costs per run.
+    installed; a worker process runs one batch of a model at a time (its compiled kernels own
+    their buffers), so start them with one thread each (``dask worker --nthreads 1 --nworkers
+    N``). Parameters change at run time, so the file is compiled once per worker process; see
+    :meth:`pfaff.NumericModel.with_parameters` for what that costs per run. (``pfaff.sweep`` is
+    this function, so ``import pfaff.sweep.worker as w`` fails: ``from pfaff.sweep import
+    worker`` reaches the module.)
 
     Examples
     --------

@@ -200,6 +200,8 @@ def _run(entry: _Compiled, spec: SweepSpec, i: int) -> tuple[Any, str, str]:
         return None, "failed", str(e)
     except Exception as e:  # a failure in the user's equations (overflow, ...) or a bug
         return None, "failed", f"{type(e).__name__}: {e}"
+    if traj.status == "interrupted":  # Ctrl-C (in this process): stop the sweep, not the run
+        raise KeyboardInterrupt
     return traj, traj.status, traj.message
 
 
