@@ -255,3 +255,55 @@ def test_netcdf_round_trip(cartesian, pendulum, tmp_path):
             np.testing.assert_array_equal(back.multipliers.values, ds.multipliers.values)
         else:  # no constraints: SciPy's netCDF3 cannot read a dimension of length zero back
             assert "multipliers" not in back and back.attrs["omitted_empty_dimensions"]
+
+
+RING = """
+[model]
+name = "pushed ring"
+coordinates = ["x"]
+parameters = { M = 1.0, r = 0.5, F = 2.0 }
+
+[[families]]
+name = "theta"
+n = 4
+first = 1
+
+[[particles]]
+mass = "M/4"
+position = ["x + r*sin(theta[k])", "r*cos(theta[k])"]
+over = "k"
+
+[[forces]]
+force = ["F", "0"]
+at = ["x", "0"]
+
+[[constraints]]
+name = "no slip"
+holonomic = "x - r*theta1"
+
+[[constraints]]
+name = "spacing"
+holonomic = "theta[k+1] - theta[k] - pi/2"
+over = ["k", 1, 3]
+
+[initial]
+q = { x = 0.0, theta = [0.0, 1.5707963267948966, 3.141592653589793, 4.71238898038469] }
+
+[simulate]
+t_end = 2.0
+"""
+
+
+def test_a_family_model(tmp_path):
+    """The ring (a family; its model is compiled again per value of F) rolls with x'' = F/(2M)."""
+    p = tmp_path / "ring.toml"
+    p.write_text(RING)
+    ds = pfaff.sweep(p, {"F": [0.0, 1.0, 2.0], "M": [1.0, 4.0]}, samples=5, scheduler="synchronous")
+    assert (ds.status == "success").all()
+    assert ds.coordinate.values.tolist() == ["x", "theta1", "theta2", "theta3", "theta4"]
+    assert ds.constraint.values.tolist()[0] == "no slip"
+    x_end = ds.q.sel(coordinate="x").isel(time=-1)
+    for F in (0.0, 1.0, 2.0):
+        for M in (1.0, 4.0):
+            assert float(x_end.sel(F=F, M=M)) == pytest.approx(F / (2 * M) * 2.0**2 / 2, abs=1e-9)
+    assert float(ds.energy_error.max()) < 1e-8  # the push's work accounted for

@@ -10,6 +10,8 @@ import numpy as np
 from pfaff.core.files import atomic_path
 from pfaff.sweep.grid import Grid
 
+NAMES = ("coordinate_names", "multiplier_names", "constraint_names")
+
 
 class Results:
     """The runs of a sweep as they come back from the tasks, in arrays over the flat run index."""
@@ -39,8 +41,7 @@ class Results:
         self.constraint_residual[i] = out["constraint_residual"]
         self.seconds[i] = out["seconds"]
         if "coordinate_names" in out and not self.names:
-            self.names = {k: out[k] for k in ("coordinate_names", "multiplier_names",
-                                              "constraint_names")}  # fmt: skip
+            self.names = {k: out[k] for k in NAMES}
         self.pids.add(out["pid"])
         return len(i)
 
@@ -55,7 +56,9 @@ class Results:
         g, names = self.grid, self.names
         dims, shape = g.names, g.shape
         m = len(names["multiplier_names"])
-        lam = self.multipliers if self.multipliers is not None else np.full((g.size, len(t_eval), m), np.nan)  # fmt: skip
+        lam = self.multipliers
+        if lam is None:  # every run failed before its model was compiled
+            lam = np.full((g.size, len(t_eval), m), np.nan)
         coords: dict[str, Any] = {n: a for n, a in zip(g.names, g.axes, strict=True)}
         coords |= {
             "time": t_eval,

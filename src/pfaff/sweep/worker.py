@@ -96,6 +96,7 @@ class _Compiled:
         self.eom = self.file.system.equations()
         self.used = {s.name for s in self.eom.parameters}
         self.base: Any = None
+        self.last: tuple[dict, Any] = ({}, None)  # the last values compiled (families)
         self.lock = threading.Lock()
 
     def model(self, params: dict[str, float]) -> Any:
@@ -107,9 +108,9 @@ class _Compiled:
             return self.base
         if getattr(self.base, "_restream", None) is not None:
             return self.base.with_parameters(values)
-        if values == self.base.parameters:
-            return self.base
-        return self.eom.compile(values)
+        if values != self.last[0]:
+            self.last = (values, self.eom.compile(values))
+        return self.last[1]
 
 
 def compiled(spec: SweepSpec) -> _Compiled:
