@@ -38,7 +38,7 @@ class FusedKernel:
         generated function: ``rfn(*params, alpha, beta, *taus, cap, slow)`` returns
         ``rhs(t, y: list) -> [q̇, q̈]`` (a list), which calls ``slow(t, y)`` where M is not
         positive definite. None if the printer could not write the expressions.
-    cfn : callable
+    cfn : callable or None
         ``cfn(*M entries, *A entries, *zeros(n), *r, shift) -> M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²I)⁻¹ r``: the
         projection's correction (:mod:`pfaff.numeric.projection`) as generated code.
     kkt_index, kkt_source : ndarray of int
@@ -66,7 +66,7 @@ class FusedKernel:
     vfn: Callable
     efn: Callable
     rfn: Callable | None
-    cfn: Callable
+    cfn: Callable | None
     kkt_index: np.ndarray
     kkt_source: np.ndarray
     entry_index: np.ndarray

@@ -380,7 +380,7 @@ class NumericModel(StreamModel):
         mass-metric corrections, on Python floats for small fused systems
         (:class:`pfaff.numeric.fused.FusedLinearization`), else on arrays."""
         fk = self._fused
-        if fk is not None and not self._full_kkt:
+        if fk is not None and fk.cfn is not None and not self._full_kkt:
             try:
                 return FusedLinearization(
                     fk, t, q.tolist(), qd.tolist(), self._p, tol, self._holonomic_list,
