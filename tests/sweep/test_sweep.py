@@ -163,6 +163,10 @@ def test_bad_vary_and_options(pendulum):
         pfaff.sweep(pendulum, {"L": [1.0]}, workers=0, **sync)
     with pytest.raises(pfaff.OptionError, match="`scheduler` must be"):
         pfaff.sweep(pendulum, {"L": [1.0]}, scheduler=42)
+    with pytest.raises(pfaff.OptionError, match="is not a scheduler address"):
+        pfaff.sweep(pendulum, {"L": [1.0]}, scheduler="tls://host:8786")
+    with pytest.raises(pfaff.OptionError, match="cannot reach the Dask scheduler"):
+        pfaff.sweep(pendulum, {"L": [1.0]}, scheduler="tcp://127.0.0.1:1")
     with pytest.raises(TypeError, match="`model`"):
         pfaff.sweep(42, {"L": [1.0]}, **sync)  # type: ignore[arg-type]
     with pytest.raises(pfaff.ModelFileError, match="cannot be read"):

@@ -69,9 +69,9 @@ def sweep(
         Reported times per run; default: the file's ``[simulate] samples``, else 201.
     scheduler : None, str or distributed.Client
         None: start a local Dask cluster of ``workers`` processes, closed at the end.
-        ``"tcp://host:8786"``: an existing cluster's scheduler. A ``distributed.Client`` (or a
-        cluster): use it as it is. ``"synchronous"``: every run in this process, without Dask
-        (small sweeps, tests, debugging).
+        ``"tcp://host:8786"``: an existing cluster's scheduler. A ``distributed.Client`` (TLS,
+        other protocols) or a cluster object: used as it is. ``"synchronous"``: every run in
+        this process, without Dask (small sweeps, tests, debugging).
     workers : int, optional
         Processes of the local cluster; default: the number of CPUs (at most one per run).
     progress : bool, optional
@@ -235,11 +235,11 @@ def _execute(
             for batch in _chunks(range(spec.grid.size), max(1, spec.grid.size // 100)):
                 bar.update(results.add(run_batch(spec, batch)))
             return {"scheduler": "synchronous", "workers": 1, "batch": 0}
-        with _client(scheduler, workers, spec.grid.size) as client:
+        with _ClientContext(scheduler, workers, spec.grid.size) as client:
             return _distributed(client, spec, results, bar)
 
 
-class _client:
+class _ClientContext:
     """A context giving a ``distributed.Client``: a new local cluster (closed at exit), an
     address, or the caller's client (left open)."""
 
@@ -290,12 +290,15 @@ class _client:
 
 
 def _reachable(address: str, timeout: float = 5.0) -> None:
-    """Fail at once (OSError) when nothing listens at a ``tcp://host:port`` address, instead of
-    after the client's retries for its whole timeout."""
+    """Refuse what is not a ``tcp://host[:port]`` address (OptionError), and fail at once
+    (OSError) when nothing listens there, instead of after the client's retries."""
     scheme, _, rest = address.rpartition("://")
-    host, _, port = rest.rpartition(":")
+    host, _, port = rest.rpartition(":") if ":" in rest else (rest, "", "8786")  # Dask's port
     if scheme not in ("", "tcp") or not host or not port.isdigit():
-        return  # another protocol or form: the client says what is wrong
+        raise OptionError(
+            f"`scheduler`: {address!r:.80} is not a scheduler address tcp://host:port (for TLS "
+            "or another protocol, pass a distributed.Client) or 'synchronous'"
+        )
     with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
         pass
 
