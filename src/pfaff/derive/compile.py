@@ -295,7 +295,13 @@ def compile_equations(
 ) -> NumericModel:
     """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
     start = time.process_time()
+    inputs = [sym.name for sym in getattr(getattr(eom, "system", None), "inputs", ())]
+    used = {p.name for p in eom.parameters}
+    if isinstance(parameters, dict):  # inputs take their values during a run: 0 until then
+        given = {k.name if isinstance(k, sp.Symbol) else k for k in parameters}
+        parameters = {**{i: 0.0 for i in inputs if i in used and i not in given}, **parameters}
     model = build_model(eom, model_parameter_values(eom, parameters), solver=solver)
+    model.inputs = inputs
     model.timings["compile"] = time.process_time() - start
     if "equations" in getattr(eom, "timings", {}):
         model.timings["equations"] = eom.timings["equations"]

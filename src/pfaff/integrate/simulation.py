@@ -25,6 +25,7 @@ from pfaff.core.errors import (
 )
 from pfaff.integrate.events import SINGULAR, AttitudeEvents
 from pfaff.integrate.ida import IDAStepper
+from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.numeric.checks import check_model, check_state
 from pfaff.numeric.projection import Projector
@@ -199,6 +200,7 @@ def simulate(
     ida_jacobian: str | None = None,
     progress: bool | None = None,
     throw: bool = False,
+    inputs: dict | None = None,
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -243,6 +245,9 @@ def simulate(
         Progress bar on stderr for runs longer than a second; default: when stderr is a terminal.
     throw : bool
         Raise :class:`pfaff.errors.SimulationError` instead of returning a failed trajectory.
+    inputs : dict, optional
+        Values of the model's inputs (``System.add_input``) during the run, by name: a number,
+        a function u(t), or a feedback law u(t, q, q̇) (:mod:`pfaff.integrate.inputs`).
 
     Returns
     -------
@@ -274,6 +279,8 @@ def simulate(
     ((3, 2), 'success')
     """
     check_model(model)
+    if inputs:
+        model = DrivenModel(model, inputs)
     t0, t1 = _span(t_span)
     te = _t_eval(t_eval, t0, t1)
     opts = _options(
@@ -302,20 +309,26 @@ def simulate(
         opts["projector"] = projector
         stepper = METHODS[method](model, t0, q0a, qd0a, t1, opts)
     except (ValueError, ArithmeticError) as e:  # the user's equations, not defined at t0
+        if isinstance(model, DrivenModel):
+            model.restore()
         if isinstance(e, PfaffError) or not raised_in_generated_code(e):
             raise
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = method != "baumgarte"
     power = model.power_function() if model.applied_power else None
-    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
-    run.events = AttitudeEvents(getattr(model, "attitudes", ()))
-    run.restart = lambda t, q, qd: METHODS[method](model, t, q, qd, t1, opts)
-    status, message = run.go(q0a, qd0a)
-    if status != "success" and throw:
-        raise SimulationError(message)
-    stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
-    return _trajectory(model, method, run, status, message, stats, projector, project_output)
+    try:
+        run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
+        run.events = AttitudeEvents(getattr(model, "attitudes", ()))
+        run.restart = lambda t, q, qd: METHODS[method](model, t, q, qd, t1, opts)
+        status, message = run.go(q0a, qd0a)
+        if status != "success" and throw:
+            raise SimulationError(message)
+        stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
+        return _trajectory(model, method, run, status, message, stats, projector, project_output)
+    finally:
+        if isinstance(model, DrivenModel):
+            model.restore()
 
 
 class _Run:

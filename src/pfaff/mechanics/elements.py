@@ -23,6 +23,7 @@ class ElementsMixin:
     """Rigid bodies, torques, springs, dampers and Rayleigh dissipation (a part of SystemSpec)."""
 
     bodies: list[Body]
+    inputs: list[sp.Symbol]
 
     def add_rigid_body(
         self: SystemSpec,
@@ -190,6 +191,27 @@ class ElementsMixin:
         damping = as_expr(c, f"damping of damper `{label}`")
         self.add_dissipation(damping * rate**2 / (2 * d.dot(d)), name=label)
 
+    def add_input(self: SystemSpec, symbol: object) -> sp.Symbol:
+        """Declare a parameter as an input: ``compile()`` does not ask for its value (0 until
+        set), ``pfaff.simulate(model, ..., inputs={name: u})`` supplies it during a run (a number,
+        u(t) or a feedback law u(t, q, q̇)), and ``linearize(..., inputs=[symbol])`` gives its
+        column of B.
+
+        Examples
+        --------
+        >>> import sympy as sp, pfaff
+        >>> x = pfaff.coordinates("x")
+        >>> s = pfaff.System([x]); s.add_particle(1, [x, 0])
+        >>> F = s.add_input("F"); s.add_force([F, 0], at=[x, 0])
+        >>> s.equations().compile({}).inputs
+        ['F']
+        """
+        sym = _input_symbol(symbol)
+        if sym.name in {p.name for p in self.inputs}:
+            raise ModelError(f"`{sym.name}` is already an input")
+        self.inputs.append(sym)
+        return sym
+
     def add_dissipation(self: SystemSpec, R: object, *, name: str | None = None) -> None:
         """Add a Rayleigh dissipation function R(q, q̇, t): Q_j = −∂R/∂q̇_j.
 
@@ -215,3 +237,16 @@ def _pair(points: object, what: str) -> tuple[sp.Matrix, sp.Matrix]:
     if p1.rows not in (2, 3):
         raise ModelError(f"{what}: points must have 2 or 3 components, got {p1.rows}")
     return p1, p2
+
+
+def _input_symbol(value: object) -> sp.Symbol:
+    if isinstance(value, str):
+        if not value.isidentifier() or value.startswith("_"):
+            raise ModelTypeError(f"an input name must be a plain identifier, got {value!r:.60}")
+        return sp.Symbol(value)
+    if isinstance(value, sp.Symbol):
+        return value
+    raise ModelTypeError(
+        "`add_input` takes a parameter symbol (or its name); a prescribed function of time or a "
+        f"feedback law is that symbol's value given to simulate(inputs=...), got {value!r:.60}"
+    )

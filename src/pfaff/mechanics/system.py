@@ -132,6 +132,7 @@ class SystemSpec(ElementsMixin):
         self._counts: dict[str, int] = dict.fromkeys(PIECE_KINDS, 0)
         self._pending_refs: dict = {}
         self.bodies: list = []  # rigid bodies (add_rigid_body), in order
+        self.inputs: list = []  # parameters declared as inputs (add_input)
 
     # ------------------------------------------------------------------ inspection helpers
     @property

@@ -1,0 +1,199 @@
+"""Inputs during a run: parameters declared with ``System.add_input`` whose values a simulation
+supplies at every evaluation: a number, a function of time u(t), or a feedback law u(t, q, q̇).
+
+:class:`DrivenModel` wraps a compiled model: before each evaluation (the right-hand side, the
+projection, the DAE blocks, the reported states) it writes the inputs' values into the model's
+run-time parameter vector. That needs compiled code that takes its parameters at run time, which
+small and medium systems have (the fused kernel); models whose kernels fold the values in are
+refused with a clear error.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from pfaff.core.errors import OptionError, StateError
+from pfaff.numeric.protocol import OdeFunction
+
+
+def _arity(fn: Callable, name: str) -> int:
+    try:
+        params = [
+            p
+            for p in inspect.signature(fn).parameters.values()
+            if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty
+        ]
+    except (TypeError, ValueError):
+        return 1
+    if len(params) not in (1, 3):
+        raise OptionError(
+            f"input `{name}` must be a number, a function u(t) or a feedback law u(t, q, qd); "
+            f"got a callable of {len(params)} arguments"
+        )
+    return len(params)
+
+
+class DrivenModel:
+    """A compiled model whose inputs take values during a run (see the module docstring).
+
+    Examples
+    --------
+    >>> import sympy as sp, pfaff
+    >>> x = pfaff.coordinates("x")
+    >>> s = pfaff.System([x]); s.add_particle(2, [x, 0]); u = sp.Symbol("u")
+    >>> s.add_force([u, 0], at=[x, 0]); _ = s.add_input(u)
+    >>> model = s.equations().compile({})
+    >>> traj = pfaff.simulate(model, [0.0], [0.0], (0, 1), inputs={"u": lambda t: 4.0})
+    >>> round(float(traj.q[-1, 0]), 9)   # x = u t² / (2 m)
+    1.0
+    """
+
+    def __init__(self, model: Any, inputs: Mapping[str, object]) -> None:
+        declared = list(getattr(model, "inputs", ()))
+        if not isinstance(inputs, Mapping):
+            raise OptionError(f"`inputs` must be a dict of input name -> value, got {inputs!r:.60}")
+        p = getattr(model, "_p", None)
+        if getattr(model, "_fused", None) is None or p is None:
+            raise OptionError(
+                "inputs need a model whose compiled code takes its parameters at run time (small "
+                "and medium systems); this model folds them into its kernels"
+            )
+        names = list(model.parameters)
+        self._model = model
+        self._base: list[float] = []  # the inputs' values at compile time (in the kernels)
+        self._slots: list[tuple[int, str, int, object]] = []
+        for name, u in inputs.items():
+            if name not in declared:
+                raise OptionError(
+                    f"`inputs`: `{name}` is not an input of this model (declared with "
+                    f"System.add_input: {', '.join(declared) or 'none'})"
+                )
+            if name not in names:  # declared, but no equation uses it
+                continue
+            i = names.index(name)
+            self._base.append(float(p[i]))
+            if callable(u):
+                self._slots.append((i, name, _arity(u, name), u))
+            else:
+                self._slots.append((i, name, 0, _value(u, name, None)))
+
+    def restore(self) -> None:
+        """Put back the values the inputs had before the run (the model is the user's)."""
+        p, params = self._model._p, self._model.parameters
+        for (i, name, *_), v in zip(self._slots, self._base, strict=True):
+            p[i] = v
+            params[name] = v
+
+    def __getattr__(self, attr: str) -> Any:
+        return getattr(self._model, attr)
+
+    def set(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """Write the inputs' values at (t, q, q̇) into the model's parameters."""
+        p, params = self._model._p, self._model.parameters
+        for i, name, kind, u in self._slots:
+            if kind == 0:
+                v = u
+            elif kind == 1:
+                v = _value(u(t), name, t)  # type: ignore[operator]
+            else:
+                v = _value(u(t, q, qd), name, t)  # type: ignore[operator]
+            p[i] = v
+            params[name] = v
+
+    # the methods of the DynamicsModel protocol, each after setting the inputs
+    def solve(self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0):
+        self.set(t, q, qd)
+        return self._model._solve(t, q, qd, alpha, beta)
+
+    def accelerations(self, t: float, q: Any, qd: Any):
+        self.set(t, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+        return self._model.accelerations(t, q, qd)
+
+    def check_determined(self, t: float, q: Any, qd: Any) -> None:
+        self.set(t, np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
+        self._model.check_determined(t, q, qd)
+
+    def residual(self, t: float, q: np.ndarray, qd: np.ndarray):
+        self.set(t, q, qd)
+        return self._model.residual(t, q, qd)
+
+    def linearize_constraints(self, t: float, q: np.ndarray, qd: np.ndarray, tol: float):
+        self.set(t, q, qd)
+        return self._model.linearize_constraints(t, q, qd, tol)
+
+    def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray):
+        self.set(t, q, qd)
+        return self._model.dae_blocks(t, q, qd)
+
+    def constraint_bias(self, t: float, q: np.ndarray, qd: np.ndarray):
+        self.set(t, q, qd)
+        return self._model.constraint_bias(t, q, qd)
+
+    def ode_function(self, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None):
+        return _DrivenField(self, alpha, beta)
+
+    def power_function(self) -> Callable:
+        """Qᵀq̇ of the applied forces with the inputs' values: the compiled power (whose
+        kernels hold the inputs' values at compile time) plus q̇ᵀ(Q(u) − Q(u₀)), taken from the
+        run-time forcing Q − h (exact when the inputs enter only applied forces, as forces and
+        torques do: h does not depend on them)."""
+        model = self._model
+        power = model.power_function()
+        base = list(self._base)
+
+        def p(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+            self.set(t, q, qd)
+            driven = np.array(model._kkt(t, q, qd)[1], dtype=float)
+            now = [model._p[i] for i, *_ in self._slots]
+            for (i, *_), v in zip(self._slots, base, strict=True):
+                model._p[i] = v
+            at_base = np.array(model._kkt(t, q, qd)[1], dtype=float)
+            for (i, *_), v in zip(self._slots, now, strict=True):
+                model._p[i] = v
+            return float(power(t, q, qd)) + float(qd @ (driven - at_base))
+
+        return p
+
+    def evaluate_states(self, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> dict:
+        """What a trajectory reports, state by state (the inputs change between them)."""
+        parts = []
+        for k in range(len(t)):
+            self.set(float(t[k]), q[k], qd[k])
+            parts.append(self._model.evaluate_states(t[k : k + 1], q[k : k + 1], qd[k : k + 1]))
+        if not parts:
+            return self._model.evaluate_states(t, q, qd)
+        return {key: np.concatenate([d[key] for d in parts]) for key in parts[0]}
+
+
+class _DrivenField(OdeFunction):
+    """y' = [q̇, q̈] with the inputs set at every evaluation (no generated right-hand side: it
+    binds the parameter values when it is made)."""
+
+    def __init__(self, driven: DrivenModel, alpha: float, beta: float) -> None:
+        self.driven, self.alpha, self.beta = driven, alpha, beta
+        self.n = driven._model.n
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        q, qd = y[: self.n], y[self.n :]
+        qdd = self.driven.solve(t, q, qd, self.alpha, self.beta)[0]
+        if not np.isfinite(qdd).all():
+            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
+        return np.concatenate([qd, qdd])
+
+
+def _value(v: object, name: str, t: float | None) -> float:
+    if isinstance(v, bool | str | bytes | complex) or np.ndim(v) != 0:
+        raise OptionError(f"input `{name}` must be a real number, got {v!r:.60}")
+    try:
+        x = float(v)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise OptionError(f"input `{name}` must be a real number, got {v!r:.60}") from None
+    if not math.isfinite(x):
+        at = "" if t is None else f" at t = {t:.17g}"
+        raise StateError(f"input `{name}` is {x}{at}")
+    return x
