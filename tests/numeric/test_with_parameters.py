@@ -120,3 +120,11 @@ def test_machine_code_and_geometry_follow():
     if model.geometry is not None:
         np.testing.assert_allclose(other.geometry.points([0.0]), [[0.0, -3.0]], atol=1e-12)
         np.testing.assert_allclose(model.geometry.points([0.0]), [[0.0, -2.0]], atol=1e-12)
+
+
+def test_linearize_after_with_parameters() -> None:
+    """The compiled linearizer follows the new values: the pendulum's -g/L."""
+    model = pfaff.models.pendulum().equations().compile({"m": 1.0, "g": 9.81, "L": 2.0})
+    short = model.with_parameters({"L": 0.5})
+    A = np.asarray(short.linearize(0.0, [0.0], [0.0], ["theta"]).A, dtype=float)
+    np.testing.assert_allclose(A, [[0.0, 1.0], [-9.81 / 0.5, 0.0]], rtol=1e-12)

@@ -798,6 +798,8 @@ class NumericModel(StreamModel):
             holonomic=self.holonomic, parameters=new, solver=self.solver,
         )  # fmt: skip
         model.attitudes, model._restream = self.attitudes, self._restream
+        model.inputs = list(getattr(self, "inputs", []))
+        model.linearizer = getattr(self, "linearizer", None)  # it takes the values at each call
         model.timings = dict(self.timings)
         model._fused, model._prefer_machine = self._fused, self._prefer_machine  # shared code
         if self._machine is not None:  # checked once: its buffer takes the values at each call
