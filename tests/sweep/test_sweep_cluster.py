@@ -70,7 +70,7 @@ def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum):
     from distributed import Client
 
     vary = {"L": np.linspace(0.5, 2.0, 6), "q0.theta": np.linspace(0.1, 1.5, 4)}
-    t_end = 40.0
+    t_end = 200.0  # runs of about 0.2 s: batches of a few runs, a sweep of seconds
     ref = pfaff.sweep(pendulum, vary, t_end=t_end, scheduler="synchronous")
     with Client(cluster) as client:
         before = client.run(os.getpid)
@@ -79,12 +79,13 @@ def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum):
         def kill_one_when_busy() -> None:
             start = time.monotonic()
             while time.monotonic() - start < 60:
-                busy = [a for a, tasks in client.processing().items() if tasks and a in before]
-                if busy and time.monotonic() - start > 1.0:  # past the probe: batches running
+                processing = client.processing()
+                if sum(map(len, processing.values())) >= 2:  # past the probe: batches running
+                    busy = [a for a, tasks in processing.items() if tasks and a in before]
                     os.kill(before[busy[0]], signal.SIGKILL)
                     killed["at"] = time.monotonic()
                     return
-                time.sleep(0.05)
+                time.sleep(0.01)
 
         killer = threading.Thread(target=kill_one_when_busy)
         killer.start()
