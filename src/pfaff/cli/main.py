@@ -108,6 +108,9 @@ def build_parser() -> argparse.ArgumentParser:
     from pfaff.cli.filecmd import add_parsers  # `pfaff equations` and `pfaff run` on a file
 
     add_parsers(sub, _debug_option)
+    from pfaff.cli.sweepcmd import add_parser as add_sweep_parser  # `pfaff sweep`
+
+    _debug_option(add_sweep_parser(sub))
     return p
 
 
@@ -438,6 +441,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None or (args.command == "demo" and args.demo is None):
         args.show_help()  # bare `pfaff` or `pfaff demo`: the help
         return 0
+    if args.command == "sweep":  # it reports its own errors and exit codes
+        from pfaff.cli.sweepcmd import run as run_sweep
+
+        return run_sweep(args)
     try:
         if args.command in ("equations", "run"):
             from pfaff.cli.filecmd import run_equations, run_model
