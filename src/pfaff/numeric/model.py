@@ -217,7 +217,7 @@ class NumericModel(StreamModel):
         ok = out.shape == (k + v.size,) and np.allclose(out[k:], v, rtol=1e-11, atol=1e-13)
         ok = ok and np.allclose(out[n : 2 * n], qdd, rtol=1e-9, atol=1e-12)
         ok = ok and np.allclose(out[2 * n : k], lam, rtol=1e-9, atol=1e-12)
-        if ok:
+        if ok and _machine_faster(compiled, buf, fk.fn, t0, q, qd, self._p):
             self._machine, self._machine_buf = compiled, buf
         return bool(ok)
 
@@ -913,6 +913,28 @@ def _machine_rhs(compiled: Callable, py: Callable, n: int, fixed: list) -> Calla
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs
+
+
+def _machine_faster(
+    compiled: Callable,
+    buf: np.ndarray,
+    fn: Callable,
+    t: float,
+    q: np.ndarray,
+    qd: np.ndarray,
+    p: list,
+) -> bool:
+    """Whether one machine-code call (q̈ and λ too) beats the generated Python kernel alone at a
+    state: it does from a few coordinates on; on a pendulum the call's overhead rules."""
+    args = [t, *q.tolist(), *qd.tolist(), *p]
+    best = []
+    for call in (lambda: fn(*args), lambda: compiled(buf)):
+        call()
+        start = time.perf_counter()
+        for _ in range(50):
+            call()
+        best.append(time.perf_counter() - start)
+    return best[1] < best[0]
 
 
 def _faster(a: Callable, b: Callable, n: int) -> Callable:
