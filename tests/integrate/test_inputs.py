@@ -92,3 +92,17 @@ def test_bad_inputs() -> None:
         s.add_input("u")
     with pytest.raises(pfaff.ModelTypeError):
         s.add_input(x)
+
+
+def test_chattering_friction_fails_instead_of_hanging() -> None:
+    """Coulomb friction −μ m g sign(ẋ) on a spring too weak to overcome it chatters about ẋ = 0:
+    the run stops with a message naming the cause, in seconds, not hours."""
+    x = pfaff.coordinates("x")
+    s = pfaff.System([x])
+    s.add_particle(1, [x, 0])
+    s.add_potential_energy(x**2)  # k = 2: spring force 2 < friction 2.94 at x = 1
+    s.add_generalized_force(x, -0.3 * 9.81 * sp.sign(x.diff(pfaff.t)))
+    model = s.equations().compile({})
+    tr = pfaff.simulate(model, [1.0], [0.0], (0, 2.0))
+    assert tr.status == "failed"
+    assert "stalled" in tr.message and "sign()" in tr.message

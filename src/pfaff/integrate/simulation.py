@@ -79,6 +79,8 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
     return te
 
 
+STALL_WINDOW = 2000  # steps over which the pace of a run is measured
+STALL_STEPS = 1e7  # a pace that needs more steps than this to finish is a stall
 MAX_STEPS = 1e9  # a max_step that forces more steps than this is refused (it would not end)
 
 
@@ -350,6 +352,26 @@ class _Run:
         self.switches: list[tuple[float, str]] = []
         self._done: list[dict] = []  # the statistics of steppers replaced after a switch
         self._last_q: np.ndarray | None = None  # the state of the last event check
+        self._count, self._window_t = 0, t0  # steps and start of the stall window (_stall)
+
+    def _stall(self, before: float, after: float) -> None:
+        """Fail a run whose steps stop advancing time (chattering at a discontinuity such as
+        Coulomb friction's sign(q̇), or a stiff system) instead of running for hours: over each
+        window of ``STALL_WINDOW`` steps, the pace must let the run end within ``STALL_STEPS``
+        more steps."""
+        self._count += 1
+        if self._count < STALL_WINDOW:
+            return
+        pace = (after - self._window_t) / self._count
+        self._count, self._window_t = 0, after
+        if pace <= 0 or (self.t1 - after) / pace > STALL_STEPS:
+            raise PfaffError(
+                f"the integration stalled at t = {after:.17g}: the last {STALL_WINDOW} steps "
+                f"averaged {pace:.3g}, which would take more than {STALL_STEPS:.0e} steps to "
+                "reach the end. The equations may be discontinuous there (sign() or abs() of a "
+                "velocity: Coulomb friction chattering about q̇ = 0; smooth it, e.g. "
+                "tanh(q̇/ε)) or stiff (try method='ida')"
+            )
 
     def finish(self) -> dict:
         """The steppers' statistics, summed over restarts."""
@@ -421,6 +443,7 @@ class _Run:
             while st.t < self.t1:
                 t_prev = st.t
                 st.step()
+                self._stall(t_prev, st.t)
                 if te is None:
                     step_work = self._work()
                     done = st
