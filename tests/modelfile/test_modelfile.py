@@ -219,3 +219,14 @@ def test_symlink_and_folder_are_errors(tmp_path, capsys) -> None:
     err = capsys.readouterr().err
     assert "cannot be read" in err or "not a regular file" in err
     assert os.path.exists(tmp_path)
+
+
+def test_run_output_netcdf_of_an_unconstrained_model_reads_back(tmp_path, capsys) -> None:
+    import xarray as xr
+
+    out = tmp_path / "run.nc"
+    code, rep = _run_json(capsys, "run", str(ISSUE_FILE), "--t-end", "1", "--output", str(out))
+    assert code == 0
+    with xr.open_dataset(out) as ds:
+        np.testing.assert_allclose(ds["q"].values[-1], rep["q_final"], rtol=0, atol=0)
+        assert ds.attrs["multipliers"] == 0

@@ -263,8 +263,14 @@ class Trajectory:
         return ds
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write :meth:`to_xarray` as netCDF (atomically)."""
+        """Write :meth:`to_xarray` as netCDF (atomically). A model without constraints has no
+        ``multiplier`` dimension in the file (netCDF3 readers refuse a zero-length one; the
+        attribute ``multipliers = 0`` says so)."""
         ds = self.to_xarray()
+        empty = [d for d, size in ds.sizes.items() if size == 0]
+        if empty:
+            ds = ds.drop_dims(empty)
+            ds.attrs.update({f"{d}s": 0 for d in empty})
         with atomic_path(path) as tmp:
             ds.to_netcdf(tmp, engine=_netcdf_engine())
         return Path(path)
