@@ -230,3 +230,21 @@ def test_run_output_netcdf_of_an_unconstrained_model_reads_back(tmp_path, capsys
     with xr.open_dataset(out) as ds:
         np.testing.assert_allclose(ds["q"].values[-1], rep["q_final"], rtol=0, atol=0)
         assert ds.attrs["multipliers"] == 0
+
+
+def test_body_attitude_as_a_table(tmp_path) -> None:
+    text = """
+[model]
+coordinates = ["s1", "s2", "s3"]
+parameters = { m = 1.0 }
+[[bodies]]
+name = "box"
+mass = "m"
+inertia = [1.0, 2.0, 3.0]
+position = [0, 0, 0]
+attitude = { kind = "mrp", coordinates = ["s1", "s2", "s3"] }
+"""
+    mf = pfaff.load_model(_write(tmp_path, text))
+    (body,) = mf.system.bodies
+    assert body.name == "box" and body.attitude.kind == "mrp"
+    assert mf.system.equations().mass_matrix[0, 0] != 0

@@ -425,6 +425,12 @@ class _Loader:
         for i, b in enumerate(self.tables("bodies")):
             key = f"bodies[{i}]"
             allowed = {"mass", "inertia", "position", "attitude", "coordinates", "sequence", "name"}
+            if isinstance(b.get("attitude"), dict):  # attitude = { kind, coordinates, sequence }
+                att_table = b["attitude"]
+                self.keys(f"{key}.attitude", att_table, {"kind", "coordinates", "sequence"},
+                          {"kind", "coordinates"})  # fmt: skip
+                b = {**{k: v for k, v in b.items() if k != "attitude"}, **att_table}
+                b["attitude"] = b.pop("kind")
             self.keys(key, b, allowed, {"mass", "inertia", "position", "attitude", "coordinates"})
             kind = b["attitude"]
             if kind not in kinds:
