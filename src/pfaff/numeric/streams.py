@@ -312,6 +312,11 @@ class StreamKernel:
         self, columns: list, code: StreamCode | Callable[[], StreamCode], count: int
     ) -> None:
         self.columns, self.count = columns, count
+        # the key that takes each column's values for all instances at once: an index (fixed),
+        # a slice (progression) or an index array (what ``take`` does, without its calls)
+        self._keys = [
+            (c.start if c.fixed else c.whole) if isinstance(c, Index) else c for c in columns
+        ]
         self._out: np.ndarray | None = None
         self.chunk = CHUNK  # instances per call of the generated function
         self._local = threading.local()
@@ -360,7 +365,8 @@ class StreamKernel:
         """One chunk (the common case below 2^15 instances): outputs as the function returns
         them, no buffer (half the cost of a call on a small model)."""
         n = self.count
-        args = [take(c, q) for c in self.columns] + [take(c, qd) for c in self.columns]
+        keys = self._keys
+        args = [q[k] for k in keys] + [qd[k] for k in keys]
         trig = self._trig(args, t_, n) if self.angles else []
         res: list = list(self.const)
         for i, j, r in zip(self.varying, self._slot, self._fn(*args, t_, *trig, *self._params)):  # noqa: B905
