@@ -354,14 +354,11 @@ class _Run:
         self._last_q: np.ndarray | None = None  # the state of the last event check
         self._count, self._window_t = 0, t0  # steps and start of the stall window (_stall)
 
-    def _stall(self, before: float, after: float) -> None:
+    def _stall(self, after: float) -> None:
         """Fail a run whose steps stop advancing time (chattering at a discontinuity such as
         Coulomb friction's sign(q̇), or a stiff system) instead of running for hours: over each
         window of ``STALL_WINDOW`` steps, the pace must let the run end within ``STALL_STEPS``
         more steps."""
-        self._count += 1
-        if self._count < STALL_WINDOW:
-            return
         pace = (after - self._window_t) / self._count
         self._count, self._window_t = 0, after
         if pace <= 0 or (self.t1 - after) / pace > STALL_STEPS:
@@ -440,14 +437,17 @@ class _Run:
         status, message = "success", "reached the end of the time span"
         work = 0.0  # of the applied forces, up to the start of the current step
         try:
+            events = bool(self.events)
             while st.t < self.t1:
                 t_prev = st.t
                 st.step()
-                self._stall(t_prev, st.t)
+                self._count += 1
+                if self._count >= STALL_WINDOW:
+                    self._stall(st.t)
                 if te is None:
                     step_work = self._work()
                     done = st
-                    switched = self._event(st) if self.events else None
+                    switched = self._event(st) if events else None
                     state = done.state() if switched is None else switched
                     self._record(done.t, *state, self.project_steps, work + step_work)
                 else:
@@ -457,7 +457,7 @@ class _Run:
                             self._record(float(ti), q, qd, True, work + self._work(float(ti)))
                         k = j
                     step_work = self._work()
-                    if self.events:
+                    if events:
                         self._event(st)
                 work += step_work
                 st = self.stepper
