@@ -16,12 +16,11 @@ import argparse
 import json
 import math
 import os
-import sys
-import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
-from pfaff.core.errors import OptionError, PfaffError, raised_in_generated_code
+from pfaff.cli.report import guarded
+from pfaff.core.errors import OptionError
 
 # the simulation options imply --simulate when given; these are their defaults
 SIMULATION_DEFAULTS = {"t_end": 2.0, "method": "projection", "rtol": 1e-9, "atol": 1e-11}
@@ -404,27 +403,6 @@ def run_pendulum(args: argparse.Namespace) -> int:
     return 0
 
 
-def _one_line(text: str) -> str:
-    return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
-
-
-def _describe(e: BaseException) -> str:
-    """``Type: message`` of an exception, without an errno tuple: one line."""
-    args = e.args
-    if len(args) == 2 and isinstance(args[0], int) and isinstance(args[1], str):
-        msg = args[1]  # OverflowError(34, 'Numerical result out of range') from math
-    else:
-        msg = str(e)
-    return _one_line(f"{type(e).__name__}: {msg}" if msg else type(e).__name__)
-
-
-def _fail(message: str, code: int, debug: bool) -> int:
-    if debug:
-        traceback.print_exc()
-    print(f"pfaff: {message}", file=sys.stderr)
-    return code
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``pfaff`` console script.
 
@@ -445,41 +423,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         from pfaff.cli.sweepcmd import run as run_sweep
 
         return run_sweep(args)
-    try:
-        if args.command in ("equations", "run"):
-            from pfaff.cli.filecmd import run_equations, run_model
+    return guarded(lambda: _dispatch(args), debug)
 
-            check_files(args)
-            if getattr(args, "animate", None):
-                _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
-            return run_equations(args) if args.command == "equations" else run_model(args)
-        if args.demo == "bicycle":
-            check_files(args)
-            return run_bicycle(args)
-        if args.demo in ("tumble", "top", "disk"):
-            check_files(args)
-            return run_body_demo(args)
-        _resolve_simulation(args)
+
+def _dispatch(args: argparse.Namespace) -> int:
+    """The command or demo ``args`` names (errors are turned into exit codes by the caller)."""
+    if args.command in ("equations", "run"):
+        from pfaff.cli.filecmd import run_equations, run_model
+
         check_files(args)
-        if args.demo == "ring":
-            return run_ring(args)
-        return run_simulation(args) if args.simulate else run_pendulum(args)
-    except KeyboardInterrupt:
-        return _fail("interrupted", 130, debug)
-    except (PfaffError, OSError) as e:
-        return _fail(f"error: {_one_line(str(e))}", 2, debug)
-    except (ValueError, ArithmeticError) as e:
-        if not raised_in_generated_code(e):
-            return _fail(_unexpected(e), 1, debug)
-        # overflow, domain error or division by zero in the model's equations at these values
-        return _fail(
-            f"error: the equations cannot be evaluated with these values ({_describe(e)})",
-            2,
-            debug,
-        )
-    except Exception as e:
-        return _fail(_unexpected(e), 1, debug)
-
-
-def _unexpected(e: BaseException) -> str:
-    return f"unexpected error: {_describe(e)} (rerun with --debug for the traceback)"
+        if getattr(args, "animate", None):
+            _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
+        return run_equations(args) if args.command == "equations" else run_model(args)
+    if args.demo == "bicycle":
+        check_files(args)
+        return run_bicycle(args)
+    if args.demo in ("tumble", "top", "disk"):
+        check_files(args)
+        return run_body_demo(args)
+    _resolve_simulation(args)
+    check_files(args)
+    if args.demo == "ring":
+        return run_ring(args)
+    return run_simulation(args) if args.simulate else run_pendulum(args)

@@ -12,14 +12,14 @@ import argparse
 import json
 import sys
 import time
-import traceback
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import OptionError, PfaffError
+from pfaff.cli.report import guarded, one_line
+from pfaff.core.errors import OptionError
 
 HELP = "simulate a model file over a grid of parameter values and initial states (Dask)"
 
@@ -84,21 +84,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the ``sweep`` command; its exit code (errors: one line on stderr)."""
-    debug = bool(getattr(args, "debug", False))
-    try:
-        return _sweep(args)
-    except KeyboardInterrupt:
-        return _fail("interrupted", 130, debug)
-    except (PfaffError, OSError) as e:
-        return _fail(f"error: {_one_line(str(e))}", 2, debug)
-    except Exception as e:
-        return _fail(
-            f"unexpected error: {type(e).__name__}: {_one_line(str(e))} "
-            "(rerun with --debug for the traceback)",
-            1,
-            debug,
-        )
+    """Run the ``sweep`` command; its exit code (errors: one line on stderr, as every command)."""
+    return guarded(lambda: _sweep(args), bool(getattr(args, "debug", False)))
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -156,23 +143,12 @@ def _text(rep: dict[str, Any]) -> str:
         lines.append(f"largest energy error {e:.3g}, largest constraint residual {r:.3g}")
     for f in rep["failures"]:
         point = ", ".join(f"{k} = {v:g}" for k, v in f["point"].items())
-        lines.append(f"  {f['status']} at {point}: {_one_line(f['message'])}")
+        lines.append(f"  {f['status']} at {point}: {one_line(f['message'])}")
     if rep["failed"] > len(rep["failures"]):
         lines.append(f"  ... and {rep['failed'] - len(rep['failures'])} more (see `status`)")
     if rep["output"]:
         lines.append(f"wrote {rep['output']}")
     return "\n".join(lines)
-
-
-def _one_line(text: str) -> str:
-    return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
-
-
-def _fail(message: str, code: int, debug: bool) -> int:
-    if debug:
-        traceback.print_exc()
-    print(f"pfaff: {message}", file=sys.stderr)
-    return code
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -1,0 +1,65 @@
+"""How every ``pfaff`` command ends on an error: one line on stderr and an exit code.
+
+0 success, 1 an unexpected error (``--debug`` shows the traceback), 2 a usage, model, value or file
+error, 130 interrupted (Ctrl-C); a command returns 3 itself for a simulation that failed.
+"""
+
+from __future__ import annotations
+
+import sys
+import traceback
+from collections.abc import Callable
+
+from pfaff.core.errors import PfaffError, raised_in_generated_code
+
+
+def one_line(text: str) -> str:
+    """``text`` with its lines joined by spaces.
+
+    Examples
+    --------
+    >>> one_line("a\\n  b\\n")
+    'a b'
+    """
+    return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
+
+
+def describe(e: BaseException) -> str:
+    """``Type: message`` of an exception, without an errno tuple: one line."""
+    args = e.args
+    if len(args) == 2 and isinstance(args[0], int) and isinstance(args[1], str):
+        msg = args[1]  # OverflowError(34, 'Numerical result out of range') from math
+    else:
+        msg = str(e)
+    return one_line(f"{type(e).__name__}: {msg}" if msg else type(e).__name__)
+
+
+def fail(message: str, code: int, debug: bool) -> int:
+    """Print ``pfaff: message`` (after the traceback with ``debug``) and return ``code``."""
+    if debug:
+        traceback.print_exc()
+    print(f"pfaff: {message}", file=sys.stderr)
+    return code
+
+
+def unexpected(e: BaseException) -> str:
+    return f"unexpected error: {describe(e)} (rerun with --debug for the traceback)"
+
+
+def guarded(action: Callable[[], int], debug: bool) -> int:
+    """``action()``'s exit code, or the exit code of the error it raised (see the module)."""
+    try:
+        return action()
+    except KeyboardInterrupt:
+        return fail("interrupted", 130, debug)
+    except (PfaffError, OSError) as e:
+        return fail(f"error: {one_line(str(e))}", 2, debug)
+    except (ValueError, ArithmeticError) as e:
+        if not raised_in_generated_code(e):
+            return fail(unexpected(e), 1, debug)
+        # overflow, domain error or division by zero in the model's equations at these values
+        return fail(
+            f"error: the equations cannot be evaluated with these values ({describe(e)})", 2, debug
+        )
+    except Exception as e:
+        return fail(unexpected(e), 1, debug)
