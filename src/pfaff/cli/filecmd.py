@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from pfaff.cli.argtypes import positive, whole
+
 RUN_FLAGS = ("t_end", "method", "rtol", "atol")
 
 
@@ -20,21 +22,28 @@ def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
     eq.add_argument("model", metavar="MODEL.toml", help="the model file")
     eq.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
     eq.add_argument("--json", action="store_true", help="print one JSON object")
-    eq.add_argument("--max-bytes", type=int, default=None, help="raise the 1 MB file-size cap")
+    eq.add_argument("--max-bytes", type=whole(1), default=None, help="raise the 1 MB file-size cap")
     common(eq)
     run = sub.add_parser("run", help="simulate a model file")
     run.add_argument("model", metavar="MODEL.toml", help="the model file")
-    run.add_argument("--t-end", type=float, help="end time (default: the file's [simulate])")
+    run.add_argument("--t-end", type=positive, help="end time (default: the file's [simulate])")
     run.add_argument("--method", choices=list(METHODS), help="integrator (default: the file's)")
-    run.add_argument("--rtol", type=float, help="relative tolerance")
-    run.add_argument("--atol", type=float, help="absolute tolerance")
-    run.add_argument("--samples", type=int, help="report this many equally spaced times")
+    run.add_argument("--rtol", type=positive, help="relative tolerance")
+    run.add_argument("--atol", type=positive, help="absolute tolerance")
+    run.add_argument("--samples", type=whole(2), help="report this many equally spaced times")
     run.add_argument("--output", metavar="run.nc|run.csv", help="write the trajectory")
     run.add_argument("--plot", metavar="run.png", help="write a figure of the run")
     run.add_argument("--animate", metavar="run.gif", help="write an animation of the run")
-    run.add_argument("--frames", type=int, default=200, help="animation frames (default 200)")
+    run.add_argument(
+        "--frames",
+        type=whole(1, "needs at least 1 frame, got {v}"),
+        default=200,
+        help="animation frames (default 200)",
+    )
     run.add_argument("--json", action="store_true", help="print one JSON object")
-    run.add_argument("--max-bytes", type=int, default=None, help="raise the 1 MB file-size cap")
+    run.add_argument(
+        "--max-bytes", type=whole(1), default=None, help="raise the 1 MB file-size cap"
+    )
     common(run)
 
 
@@ -124,8 +133,6 @@ def run_model(args: argparse.Namespace) -> int:
     if t_end is None:
         raise OptionError(f"{args.model}: no end time: give --t-end or [simulate] t_end")
     samples = settings.pop("samples", None)
-    if args.animate and args.frames < 1:
-        raise OptionError("--frames must be at least 1")
     model = mf.compile()
     t_eval = np.linspace(0.0, t_end, samples) if samples else None
     start = time.perf_counter()

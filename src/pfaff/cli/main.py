@@ -19,39 +19,13 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
+from pfaff.cli.argtypes import finite, positive, whole
 from pfaff.cli.report import guarded
 from pfaff.core.errors import OptionError
 
 # the simulation options imply --simulate when given; these are their defaults
 SIMULATION_DEFAULTS = {"t_end": 2.0, "method": "projection", "rtol": 1e-9, "atol": 1e-11}
 OUTPUT_FORMATS = ("nc", "csv")
-
-
-def _positive_int(s: str) -> int:
-    try:
-        v = int(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {s!r}") from None
-    if v < 2:
-        raise argparse.ArgumentTypeError(f"the ring needs at least 2 particles, got {v}")
-    return v
-
-
-def _finite(s: str) -> float:
-    try:
-        v = float(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {s!r}") from None
-    if v != v or v in (float("inf"), float("-inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {s!r}")
-    return v
-
-
-def _positive(s: str) -> float:
-    v = _finite(s)
-    if v <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {s!r}")
-    return v
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -72,14 +46,18 @@ def build_parser() -> argparse.ArgumentParser:
     ring = dsub.add_parser("ring", help="the seed's rolling ring of N particles")
     _debug_option(ring)
     ring.add_argument(
-        "--particles", "-N", type=_positive_int, default=6, help="number of particles (default 6)"
+        "--particles",
+        "-N",
+        type=whole(2, "the ring needs at least 2 particles, got {v}"),
+        default=6,
+        help="number of particles (default 6)",
     )
     ring.add_argument(
-        "--force", "-F", type=_finite, default=2.0, help="push at the centre (default 2)"
+        "--force", "-F", type=finite, default=2.0, help="push at the centre (default 2)"
     )
-    ring.add_argument("--mass", type=_positive, default=1.0, help="total mass M (default 1)")
-    ring.add_argument("--radius", type=_positive, default=0.5, help="radius r (default 0.5)")
-    ring.add_argument("--theta-dot", type=_finite, default=0.0, help="spin rate θ̇ (default 0)")
+    ring.add_argument("--mass", type=positive, default=1.0, help="total mass M (default 1)")
+    ring.add_argument("--radius", type=positive, default=0.5, help="radius r (default 0.5)")
+    ring.add_argument("--theta-dot", type=finite, default=0.0, help="spin rate θ̇ (default 0)")
     ring.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     ring.add_argument(
         "--plot",
@@ -91,11 +69,11 @@ def build_parser() -> argparse.ArgumentParser:
     _animation_options(ring)
     pend = dsub.add_parser("pendulum", help="the Cartesian pendulum (x, y) with its rod constraint")
     _debug_option(pend)
-    pend.add_argument("--mass", type=_positive, default=1.0, help="bob mass m (default 1)")
-    pend.add_argument("--length", type=_positive, default=1.0, help="rod length L (default 1)")
-    pend.add_argument("--gravity", type=_finite, default=9.81, help="g (default 9.81)")
+    pend.add_argument("--mass", type=positive, default=1.0, help="bob mass m (default 1)")
+    pend.add_argument("--length", type=positive, default=1.0, help="rod length L (default 1)")
+    pend.add_argument("--gravity", type=finite, default=9.81, help="g (default 9.81)")
     pend.add_argument(
-        "--angle", type=_finite, default=90.0, help="release angle from the vertical, degrees"
+        "--angle", type=finite, default=90.0, help="release angle from the vertical, degrees"
     )
     pend.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     pend.add_argument(
@@ -136,7 +114,7 @@ def _body_demos(dsub: argparse._SubParsersAction) -> None:
                 "keeps clear of its singularity; 321 passes close to gimbal lock)",
             )
         d.add_argument(
-            "--t-end", type=_positive, default=t_end, help=f"end time (default {t_end:g})"
+            "--t-end", type=positive, default=t_end, help=f"end time (default {t_end:g})"
         )
         d.add_argument("--json", action="store_true", help="print one JSON object instead of text")
         d.add_argument("--plot", metavar="FILE.png", help="write a figure of the run")
@@ -204,10 +182,10 @@ def _simulation_options(p: argparse.ArgumentParser) -> None:
 
     g = p.add_argument_group("simulation (each option below implies --simulate)")
     g.add_argument("--simulate", action="store_true", help="integrate the motion in time")
-    g.add_argument("--t-end", type=_positive, help="end time (default 2)")
+    g.add_argument("--t-end", type=positive, help="end time (default 2)")
     g.add_argument("--method", choices=list(METHODS), help="integrator (default projection)")
-    g.add_argument("--rtol", type=_positive, help="relative tolerance (default 1e-9)")
-    g.add_argument("--atol", type=_positive, help="absolute tolerance (default 1e-11)")
+    g.add_argument("--rtol", type=positive, help="relative tolerance (default 1e-9)")
+    g.add_argument("--atol", type=positive, help="absolute tolerance (default 1e-11)")
     g.add_argument(
         "--output", metavar="FILE.nc|FILE.csv", help="write the trajectory (netCDF or CSV)"
     )
@@ -221,18 +199,11 @@ def _animation_options(p: argparse.ArgumentParser) -> None:
         help="write an animation of the run (GIF; MP4 where ffmpeg exists; implies --simulate)",
     )
     p.add_argument(
-        "--frames", type=_frame_count, default=200, help="animation frames at most (default 200)"
+        "--frames",
+        type=whole(1, "needs at least 1 frame, got {v}"),
+        default=200,
+        help="animation frames at most (default 200)",
     )
-
-
-def _frame_count(s: str) -> int:
-    try:
-        v = int(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {s!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"needs at least 1 frame, got {v}")
-    return v
 
 
 def _write_animation(traj, args: argparse.Namespace, rep: dict) -> None:
@@ -432,8 +403,6 @@ def _dispatch(args: argparse.Namespace) -> int:
         from pfaff.cli.filecmd import run_equations, run_model
 
         check_files(args)
-        if getattr(args, "animate", None):
-            _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
         return run_equations(args) if args.command == "equations" else run_model(args)
     if args.demo == "bicycle":
         check_files(args)

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from pfaff.cli.argtypes import positive, whole
 from pfaff.cli.report import guarded, one_line
 from pfaff.core.errors import OptionError
 
@@ -33,29 +34,6 @@ def _vary(text: str) -> tuple[str, np.ndarray]:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
-def _count(least: int) -> Any:
-    def parse(s: str) -> int:
-        try:
-            v = int(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number, got {s!r}") from None
-        if v < least:
-            raise argparse.ArgumentTypeError(f"expected at least {least}, got {v}")
-        return v
-
-    return parse
-
-
-def _end(s: str) -> float:
-    try:
-        v = float(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {s!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive finite number, got {s!r}")
-    return v
-
-
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add the ``sweep`` command to the ``pfaff`` command's subparsers; returns its parser."""
     p = subparsers.add_parser("sweep", help=HELP, description=HELP)
@@ -69,8 +47,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="a parameter (L=0.5:2:16), an initial coordinate (q0.theta=0:1:11) or speed "
         "(qd0.theta=...): COUNT values from START to STOP included; repeat for a grid",
     )
-    p.add_argument("--t-end", type=_end, help="end time (default: the file's [simulate] t_end)")
-    p.add_argument("--samples", type=_count(2), help="reported times per run (default 201)")
+    p.add_argument("--t-end", type=positive, help="end time (default: the file's [simulate] t_end)")
+    p.add_argument("--samples", type=whole(2), help="reported times per run (default 201)")
     p.add_argument("--output", metavar="FILE.nc", help="write the results as netCDF")
     p.add_argument(
         "--scheduler",
@@ -78,7 +56,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="a running Dask scheduler (tcp://host:8786); default: a local cluster of "
         "processes; 'synchronous': in this process",
     )
-    p.add_argument("--workers", type=_count(1), help="local cluster size (default: the CPUs)")
+    p.add_argument("--workers", type=whole(1), help="local cluster size (default: the CPUs)")
     p.add_argument("--json", action="store_true", help="print one JSON object (the summary)")
     return p
 
