@@ -11,13 +11,13 @@ refused with a clear error.
 from __future__ import annotations
 
 import inspect
-import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from pfaff.core.errors import OptionError, StateError
+from pfaff.numeric.checks import real_number
 from pfaff.numeric.protocol import OdeFunction
 
 
@@ -187,13 +187,8 @@ class _DrivenField(OdeFunction):
 
 
 def _value(v: object, name: str, t: float | None) -> float:
-    if isinstance(v, bool | str | bytes | complex) or np.ndim(v) != 0:
-        raise OptionError(f"input `{name}` must be a real number, got {v!r:.60}")
-    try:
-        x = float(v)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise OptionError(f"input `{name}` must be a real number, got {v!r:.60}") from None
-    if not math.isfinite(x):
-        at = "" if t is None else f" at t = {t:.17g}"
-        raise StateError(f"input `{name}` is {x}{at}")
-    return x
+    """A given input value (an :class:`OptionError`), or one a callable returned at t (a
+    :class:`StateError` naming t) as a finite float."""
+    if t is None:
+        return real_number(v, f"inputs['{name}']", OptionError)
+    return real_number(v, f"inputs['{name}'] at t = {t:.17g}", StateError)
