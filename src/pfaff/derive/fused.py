@@ -75,8 +75,10 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
     rfn = rfn_aug = cfn = None  # the generated solve: straight-line code of O((n + m)³)
     if solve:
         rfn = _rhs_function(code["body"], code["outs"], mass, acon, n, m, len(eom.parameters))
-        rfn_aug = _rhs_function(
-            code["body"], code["outs"], mass, acon, n, m, len(eom.parameters), augmented=True
+        rfn_aug = _on_first_call(  # needed only where M is singular (quaternions): made then
+            lambda: _rhs_function(
+                code["body"], code["outs"], mass, acon, n, m, len(eom.parameters), augmented=True
+            )
         )
         cfn = schur_solver(n, m, mass, acon, damped=True)
     N = n + m
@@ -104,6 +106,21 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         _llvm_factory(eom, key) if solve else None,
         rfn_aug,
     ), status
+
+
+def _on_first_call(build: Callable[[], Callable | None]) -> Callable:
+    """A function that generates the function ``build`` returns on its first call, then calls
+    it (``ValueError`` when it could not be generated)."""
+    made: list = []
+
+    def call(*args: object) -> object:
+        if not made:
+            made.append(build())
+        if made[0] is None:
+            raise ValueError("the generated function could not be made")
+        return made[0](*args)
+
+    return call
 
 
 def _fusable(eom: Derivation) -> bool:
