@@ -26,6 +26,7 @@ import scipy.sparse as sps
 
 from pfaff.core.errors import PfaffError
 from pfaff.integrate.work import hermite_work
+from pfaff.numeric.kkt import augmentation_weight
 from pfaff.numeric.projection import diagonal_weights
 from pfaff.numeric.protocol import DynamicsModel
 
@@ -97,10 +98,10 @@ class IDAStepper:
         return M, A, forcing, f, g
 
     def _augmentation(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
-        """ρ of M + ρAᵀA, of the size of M's diagonal against AᵀA's."""
+        """ρ of M + ρAᵀA (:func:`pfaff.numeric.kkt.augmentation_weight`) at the first state."""
         M, A, *_ = self.model.dae_blocks(t, q, qd)
         M, A = (x.toarray() if sps.issparse(x) else x for x in (M, A))
-        return float(np.abs(np.diag(M)).max() / max((A * A).sum(axis=0).max(), 1e-300))
+        return augmentation_weight(M, A)
 
     def _residual(self, t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray) -> None:
         """The GGL residuals. With a singular M the dynamic rows are those of the augmented

@@ -96,6 +96,18 @@ def floored_array(d: np.ndarray, tau: np.ndarray | float) -> np.ndarray:
     return np.where(d >= tau, d, 0.5 * tau + low * low / (2.0 * np.where(tau > 0, tau, 1.0)))
 
 
+def augmentation_weight(M: np.ndarray, A: np.ndarray) -> float:
+    """ρ of the augmented Lagrangian M + ρAᵀA (a singular M, as quaternions make it): the size
+    of M's diagonal against AᵀA's, so that neither term swamps the other.
+
+    Examples
+    --------
+    >>> augmentation_weight(np.diag([0.0, 4.0]), np.array([[2.0, 0.0]]))
+    1.0
+    """
+    return float(np.abs(np.diag(M)).max() / max((A * A).sum(axis=0).max(), 1e-300))
+
+
 def row_scales(M: np.ndarray, A: np.ndarray) -> np.ndarray:
     """Sizes s_i = A_i M⁻¹ A_iᵀ of the constraint rows (at least 1e-12 of the largest).
 

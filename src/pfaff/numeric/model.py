@@ -47,6 +47,7 @@ from pfaff.numeric.kkt import (
     RangeSpaceSolver,
     SingularKKT,
     SparseSolver,
+    augmentation_weight,
     row_scales,
     solve_floored,
 )
@@ -601,7 +602,7 @@ class NumericModel(StreamModel):
         if fk is None or fk.rfn_aug is None or not self.m:
             return 0.0
         M, A = K[:n, :n], K[n:, :n]
-        rho = float(np.abs(np.diag(M)).max() / max((A * A).sum(axis=0).max(), 1e-300))
+        rho = augmentation_weight(M, A)
         try:
             fn = fk.rfn_aug(*self._p, 0.0, 0.0, *([0.0] * (self.m + 1)), rho, lambda t, y: None)
             fast = fn(t, [*q.tolist(), *qd.tolist()])
