@@ -157,32 +157,23 @@ def run_model(args: argparse.Namespace) -> int:
 
 
 def _run_report(mf: Any, traj: Any, wall: float) -> dict:
+    """The demos' run summary (:func:`pfaff.cli.simdemo._summary`) with the file's model name,
+    the final state and the largest constraint residual of either level."""
+    from pfaff.cli.simdemo import _summary
+
     k = len(traj.t)
-    res = np.abs(traj.constraint_residual)
-    return {
-        "model": mf.name,
-        "method": traj.method,
-        "status": traj.status,
-        "message": traj.message,
-        "t_end": float(traj.t[-1]) if k else None,
-        "points": k,
-        "coordinates": list(traj.coordinate_names),
-        "q_final": traj.q[-1].tolist() if k else None,
-        "qd_final": traj.qd[-1].tolist() if k else None,
-        "multipliers_final": traj.multipliers[-1].tolist() if k else None,
-        "multiplier_names": list(traj.multiplier_names),
-        "energy_initial": float(traj.energy[0]) if k else None,
-        "energy_final": float(traj.energy[-1]) if k else None,
-        "nc_work": float(traj.nc_work[-1]) if k else None,
-        "energy_balance_error": float(np.abs(traj.energy_balance).max()) if k else None,
-        "max_constraint_residual": float(res.max(initial=0.0)),
-        "stats": {
-            key: (int(v) if isinstance(v, int | np.integer) else v)
-            for key, v in traj.stats.items()
-            if v is not None
-        },
-        "wall_time_s": wall,
-    }
+    rep = {"model": mf.name, **_summary(traj, wall)}
+    rep.update(
+        coordinates=list(traj.coordinate_names),
+        q_final=traj.q[-1].tolist() if k else None,
+        qd_final=traj.qd[-1].tolist() if k else None,
+        multipliers_final=traj.multipliers[-1].tolist() if k else None,
+        multiplier_names=list(traj.multiplier_names),
+        energy_initial=float(traj.energy[0]) if k else None,
+        energy_final=float(traj.energy[-1]) if k else None,
+        max_constraint_residual=max(rep["max_position_residual"], rep["max_velocity_residual"]),
+    )
+    return rep
 
 
 def _run_text(rep: dict) -> str:
