@@ -33,6 +33,7 @@ b'payload'
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import os
 import platform
@@ -86,21 +87,18 @@ def model_key(eom: object) -> str | None:
     return h.hexdigest()
 
 
-_GENERATOR: list[str] = []
-
-
+@functools.cache
 def _generator_hash() -> str:
     """The hash of the code that generates an entry: a changed generator never loads old code."""
-    if not _GENERATOR:
-        here = Path(__file__).parent
-        h = hashlib.sha256()
-        for name in ("cache", "engine", "fused", "templates", "blocks", "equations"):
-            h.update((here / f"{name}.py").read_bytes())
-        h.update((here.parent / "numeric" / "smallsolve.py").read_bytes())
-        _GENERATOR.append(h.hexdigest())
-    return _GENERATOR[0]
+    here = Path(__file__).parent
+    h = hashlib.sha256()
+    for name in ("cache", "engine", "fused", "templates", "blocks", "equations"):
+        h.update((here / f"{name}.py").read_bytes())
+    h.update((here.parent / "numeric" / "smallsolve.py").read_bytes())
+    return h.hexdigest()
 
 
+@functools.cache
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
