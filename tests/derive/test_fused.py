@@ -103,7 +103,7 @@ def test_new_parameter_values_reuse_the_generated_code() -> None:
 def test_machine_code_rhs_matches_the_generated_python(name: str, tau: float) -> None:
     """The right-hand side compiled by SymEngine's LLVM backend against the generated Python
     (the same algorithm and floor), with Baumgarte terms, at random states off the manifold."""
-    from pfaff.numeric.model import _machine_rhs
+    from pfaff.numeric.evaluator import machine_rhs as _machine_rhs
 
     system, values = CASES[name]
     model = system.equations().compile(values)

@@ -488,18 +488,20 @@ def test_stats(pend: pfaff.NumericModel, method: str) -> None:
 
 # ---------------------------------------------------------------------------------- 12. Ctrl-C
 def test_keyboard_interrupt_keeps_points(pend: pfaff.NumericModel, monkeypatch) -> None:
-    original = pend.ode_function
+    original = type(pend).ode_function  # (models are immutable: the class is patched)
 
     class Interrupted(OdeFunction):  # the array path: FloatDOP853 is not used without on_lists
-        def __init__(self, *args, **kw) -> None:
-            self.fun, self.calls = original(*args, **kw), itertools.count()
+        def __init__(self, fun: OdeFunction) -> None:
+            self.fun, self.calls = fun, itertools.count()
 
         def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
             if next(self.calls) >= 600:
                 raise KeyboardInterrupt
             return self.fun(t, y)
 
-    monkeypatch.setattr(pend, "ode_function", Interrupted)
+    monkeypatch.setattr(
+        type(pend), "ode_function", lambda self, *a, **kw: Interrupted(original(self, *a, **kw))
+    )
     traj = pfaff.simulate(pend, Q0, QD0, (0.0, 100.0))
     assert traj.status == "interrupted" and not traj.success
     assert "interrupted" in traj.message
@@ -509,14 +511,14 @@ def test_keyboard_interrupt_keeps_points(pend: pfaff.NumericModel, monkeypatch) 
 
 
 def test_keyboard_interrupt_ida(pend: pfaff.NumericModel, monkeypatch) -> None:
-    original, calls = pend.dae_blocks, itertools.count()
+    original, calls = type(pend).dae_blocks, itertools.count()
 
     def blocks(*args):
         if next(calls) >= 400:
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(pend, "dae_blocks", blocks)
+    monkeypatch.setattr(type(pend), "dae_blocks", blocks)
     traj = pfaff.simulate(pend, Q0, QD0, (0.0, 100.0), method="ida")
     assert traj.status == "interrupted"
     assert 1 < len(traj) and traj.t[-1] < 100.0

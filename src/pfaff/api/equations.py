@@ -6,12 +6,10 @@ from pfaff.core.errors import ModelError, OptionError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.equations import Derivation, Solution
-from pfaff.derive.linearize import ModelLinearizer
 from pfaff.derive.linearize import linearize as _linearize
 from pfaff.numeric.linearization import Linearization
-from pfaff.numeric.model import SOLVERS as GENERAL_SOLVERS
 from pfaff.numeric.model import NumericModel
-from pfaff.numeric.structured import SOLVERS as STRUCTURED_SOLVERS
+from pfaff.numeric.solvers import check as check_solver
 from pfaff.numeric.structured import StructuredModel
 
 __all__ = ["EquationsOfMotion", "Solution"]
@@ -61,7 +59,11 @@ class EquationsOfMotion(Derivation):
     """
 
     def compile(
-        self, parameters: dict | None = None, *, solver: str | None = None
+        self,
+        parameters: dict | None = None,
+        *,
+        solver: str | None = None,
+        evaluator: str | None = None,
     ) -> NumericModel | StructuredModel:
         """Compile to a numeric model with the given parameter values.
 
@@ -78,6 +80,11 @@ class EquationsOfMotion(Derivation):
             default up to 400 unknowns, with the rank-loss floor), ``"lu"`` or ``"sparse"`` (the
             default above). Models with families: ``"triangular"`` (the default where the
             constraints have that structure) or ``"sparse"``.
+        evaluator : {None, "template", "python", "machine"}, optional
+            Which code evaluates a state (:mod:`pfaff.numeric.evaluator`): by default the rule
+            there (machine code from 8 unknowns n + m on where the system is small enough for
+            the fused kernel, else its generated Python, else the template kernels). Reported
+            in ``model.timings["evaluator"]``. Models with families have only ``"template"``.
 
         Examples
         --------
@@ -93,17 +100,14 @@ class EquationsOfMotion(Derivation):
                 "they cannot be compiled; give `solutions` for the dependent coordinates to "
                 "System.reduce, or compile the full equations"
             )
-        kinds = STRUCTURED_SOLVERS if self.family else GENERAL_SOLVERS
-        if solver is not None and solver not in kinds:
-            kind = "with families" if self.family else "without families"
-            raise OptionError(
-                f"`solver` of a model {kind} must be one of {', '.join(kinds)}; got {solver!r:.80}"
-            )
+        check_solver(solver, "family" if self.family else "general")
         if self.family:
+            if evaluator not in (None, "template"):
+                raise OptionError(
+                    f"`evaluator` of a model with families must be 'template'; got {evaluator!r:.80}"
+                )
             return compile_structured(self, parameters or {}, solver=solver)
-        model = compile_equations(self, parameters or {}, solver=solver)
-        model.linearizer = ModelLinearizer(self, model.parameters)  # NumericModel.linearize
-        return model
+        return compile_equations(self, parameters or {}, solver=solver, evaluator=evaluator)
 
     def linearize(
         self,

@@ -67,10 +67,68 @@ def concat(parts: Sequence[Sequence]) -> Sequence:
     total = sum(len(p) for p in parts)
     if total <= 4096:
         return tuple(x for p in parts for x in p)
-    starts = np.cumsum([0] + [len(p) for p in parts])
+    return Concat(parts)
 
-    def item(i: int) -> object:
-        j = int(np.searchsorted(starts, i, side="right")) - 1
-        return parts[j][i - int(starts[j])]
 
-    return LazySeq(total, item)
+class Concat(LazySeq):
+    """Sequences one after the other, items made on demand (it pickles as its parts)."""
+
+    def __init__(self, parts: Sequence[Sequence]) -> None:
+        self.parts = list(parts)
+        self.starts = np.cumsum([0] + [len(p) for p in self.parts])
+        super().__init__(int(self.starts[-1]), self._one)
+
+    def __reduce__(self) -> tuple:
+        return (Concat, (self.parts,))
+
+    def _one(self, i: int) -> object:
+        j = int(np.searchsorted(self.starts, i, side="right")) - 1
+        return self.parts[j][i - int(self.starts[j])]
+
+
+class NumberedNames(LazySeq):
+    """Names made on demand: ``head`` as given, then numbered runs ``prefix + str(first + k)``.
+
+    Unlike a :class:`LazySeq` of closures it pickles, in O(number of runs): a compiled model of
+    2^24 particles carries its names without listing them.
+
+    Parameters
+    ----------
+    head : sequence of str
+        The first names, as they are.
+    runs : sequence of (prefix, first, count)
+        Then ``count`` names ``prefix{first}``, ``prefix{first + 1}``, … per run.
+
+    Examples
+    --------
+    >>> names = NumberedNames(["x", "theta"], [("r", 1, 3), ("lambda", 5, 2)])
+    >>> list(names), names[3], len(names)
+    (['x', 'theta', 'r1', 'r2', 'r3', 'lambda5', 'lambda6'], 'r2', 7)
+    >>> import pickle; pickle.loads(pickle.dumps(names))[-1]
+    'lambda6'
+    """
+
+    def __init__(self, head: Sequence[str], runs: Sequence[tuple[str, int, int]]) -> None:
+        self.head = [str(h) for h in head]
+        self.runs = [(str(p), int(a), int(c)) for p, a, c in runs]
+        self.starts = np.cumsum([len(self.head)] + [c for _, _, c in self.runs]).tolist()
+        super().__init__(self.starts[-1], self._one, self._many)
+
+    def __reduce__(self) -> tuple:
+        return (NumberedNames, (self.head, self.runs))
+
+    def _one(self, i: int) -> str:
+        if i < len(self.head):
+            return self.head[i]
+        k = int(np.searchsorted(self.starts, i, side="right")) - 1
+        prefix, first, _ = self.runs[k]
+        return f"{prefix}{first + i - self.starts[k]}"
+
+    def _many(self, lo: int, hi: int) -> list[str]:
+        out = self.head[lo:hi]
+        for (prefix, first, _), s0, s1 in zip(
+            self.runs, self.starts, self.starts[1:], strict=False
+        ):
+            a, b = max(lo, s0), min(hi, s1)
+            out += [f"{prefix}{first + j - s0}" for j in range(a, b)]
+        return out

@@ -8,6 +8,14 @@ import numpy as np
 import sympy as sp
 
 
+def _lazy_entries(raw: dict, convert: object, done: bool, converted: dict) -> LazyEntries:
+    """A :class:`LazyEntries` from its pickled parts."""
+    out = LazyEntries(raw, convert)
+    dict.update(out, converted)
+    out._done = done
+    return out
+
+
 class LazyEntries(dict):
     """A template's entries as SymPy, converted from their SymEngine forms on first use.
 
@@ -23,6 +31,10 @@ class LazyEntries(dict):
         super().__init__()
         self.raw, self._convert = raw, convert
         self._done = False
+
+    def __reduce__(self) -> tuple:
+        converted = dict(dict.items(self)) if self._done else {}
+        return (_lazy_entries, (self.raw, self._convert, self._done, converted))
 
     def _materialize(self) -> None:
         if not self._done:

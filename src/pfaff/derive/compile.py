@@ -1,7 +1,7 @@
 """The compile stage: parameter values checked, kernels generated, a :class:`NumericModel` built.
 
-Each block becomes stream parts (:class:`pfaff.numeric.structured.DynStreams`,
-:class:`~pfaff.numeric.structured.ConStreams`): one generated kernel per template
+Each block becomes stream parts (:class:`pfaff.numeric.parts.DynStreams`,
+:class:`~pfaff.numeric.parts.ConStreams`): one generated kernel per template
 (:func:`pfaff.derive.codegen.stream_code`, the one kernel generator of NumPy code), evaluated over
 all its instances, with the global rows and columns as progressions
 (:class:`pfaff.numeric.streams.Index`) where they are, else as index arrays. The same parts make
@@ -25,10 +25,11 @@ from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
 from pfaff.derive.geometry import build_geometry
+from pfaff.derive.linearize import ModelLinearizer
 from pfaff.numeric.fused import FusedKernel
-from pfaff.numeric.model import NumericModel
+from pfaff.numeric.model import DENSE_LIMIT, NumericModel
+from pfaff.numeric.parts import ConStreams, DynStreams
 from pfaff.numeric.streams import Index, StreamCode, StreamKernel
-from pfaff.numeric.structured import ConStreams, DynStreams
 
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
@@ -212,11 +213,15 @@ def build_model(
     *,
     constraints_only: bool = False,
     solver: str | None = None,
+    evaluator: str | None = None,
+    inputs: Sequence[str] = (),
+    timings: dict | None = None,
 ) -> NumericModel:
-    """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values.
-
-    Small systems also get the fused scalar kernel (:mod:`pfaff.derive.fused`), which the model
-    takes only if it agrees with the template kernels (:meth:`NumericModel.use_fused`).
+    """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values,
+    in one place: the stream parts, the fused kernel of a small system (checked by the model
+    once, :mod:`pfaff.numeric.general`), the attitude sets, the geometry, the linearization
+    factory and the way to other parameter values. ``evaluator``: see
+    :mod:`pfaff.numeric.evaluator`.
     """
     params = tuple(eom.parameters)
     dyn = (
@@ -233,9 +238,23 @@ def build_model(
         for b in eom.blocks
         if b.local.kind == "constraint"
     ]
-    model = NumericModel(
-        eom.n,
-        eom.m,
+    timings = dict(timings or {})
+    fused, missing = None, "the system is too large or has no dynamics for one"
+    n, m = eom.n, eom.m
+    if solver is not None and solver != "range-space":
+        missing = f"the solver is {solver!r} (the fused kernel's solve is range-space)"
+    elif not constraints_only and n + m <= DENSE_LIMIT and evaluator != "template":
+        start = time.process_time()
+        fused, status = fused_kernel(eom)
+        timings["codegen"] = time.process_time() - start
+        timings["cache"] = status
+        if fused is None:
+            missing = "the system is too large for it or uses a function its printer lacks"
+    elif evaluator == "template":
+        missing = ""
+    return NumericModel(
+        n,
+        m,
         dyn,
         con,
         coordinate_names=[str(q.func) for q in eom.coordinates],
@@ -244,18 +263,18 @@ def build_model(
         holonomic=np.array(eom.holonomic, dtype=bool),
         parameters={p.name: v for p, v in zip(params, values, strict=True)},
         solver=solver,
+        fused=fused,
+        fused_missing=missing,
+        evaluator=evaluator,
+        inputs=inputs,
+        attitudes=attitude_sets(eom),
+        geometry=None if constraints_only else build_geometry(eom, values),  # animations
+        linearizer=None
+        if constraints_only
+        else ModelLinearizer(eom, {p.name: v for p, v in zip(params, values, strict=True)}),
+        restream=Restream(eom, params, constraints_only),  # for model.with_parameters
+        timings=timings,
     )
-    model.attitudes = attitude_sets(eom)
-    model.geometry = None if constraints_only else build_geometry(eom, values)  # animations
-    model._restream = Restream(eom, params, constraints_only)  # for model.with_parameters
-    if not constraints_only and model.solver == "range-space":
-        start = time.process_time()
-        fused, status = fused_kernel(eom)
-        model.timings["codegen"] = time.process_time() - start
-        model.timings["cache"] = status
-        if fused is not None:
-            model.use_fused(fused)
-    return model
 
 
 def attitude_sets(eom: Derivation) -> list[tuple[str, str, tuple[int, ...], str]]:
@@ -290,21 +309,29 @@ def fused_kernel(eom: Derivation) -> tuple[FusedKernel | None, str]:
     return fused, status
 
 
+def input_names(eom: Derivation) -> list[str]:
+    """The names of the inputs declared on ``eom``'s system (``System.add_input``)."""
+    return [sym.name for sym in getattr(getattr(eom, "system", None), "inputs", ())]
+
+
 def compile_equations(
-    eom: Derivation, parameters: dict, *, solver: str | None = None
+    eom: Derivation, parameters: dict, *, solver: str | None = None, evaluator: str | None = None
 ) -> NumericModel:
     """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
     start = time.process_time()
-    inputs = [sym.name for sym in getattr(getattr(eom, "system", None), "inputs", ())]
+    inputs = input_names(eom)
     used = {p.name for p in eom.parameters}
-    if isinstance(parameters, dict):  # inputs take their values during a run: 0 until then
+    if isinstance(parameters, dict):  # inputs take their values per call or per run: 0 here
         given = {k.name if isinstance(k, sp.Symbol) else k for k in parameters}
         parameters = {**{i: 0.0 for i in inputs if i in used and i not in given}, **parameters}
-    model = build_model(eom, model_parameter_values(eom, parameters), solver=solver)
-    model.inputs = inputs
-    model.timings["compile"] = time.process_time() - start
+    timings = {}
     if "equations" in getattr(eom, "timings", {}):
-        model.timings["equations"] = eom.timings["equations"]
+        timings["equations"] = eom.timings["equations"]
+    values = model_parameter_values(eom, parameters)
+    model = build_model(
+        eom, values, solver=solver, evaluator=evaluator, inputs=inputs, timings=timings
+    )
+    model.timings["compile"] = time.process_time() - start
     return model
 
 
@@ -313,10 +340,12 @@ class Restream:
     (:meth:`pfaff.NumericModel.with_parameters`): each template whose expressions use a changed
     parameter gets new kernels (lazy: generated on first use); the others are shared."""
 
-    def __init__(self, eom: Derivation, params: tuple, constraints_only: bool) -> None:
-        self.params, self.constraints_only = params, constraints_only
+    def __init__(
+        self, eom: Derivation, params: tuple, constraints_only: bool, lazy: bool = True
+    ) -> None:
+        self.params, self.constraints_only, self.lazy = params, constraints_only, lazy
         self.dyn = [] if constraints_only else [b for b in eom.blocks if b.local.kind == "dynamics"]
-        self.con = [b for b in eom.blocks if b.local.kind == "constraint"]
+        self.con = [b for b in eom.blocks if b.local.kind != "dynamics"]
         self._uses: tuple[list, list] | None = None
 
     def uses(self) -> tuple[list[frozenset], list[frozenset]]:
@@ -342,11 +371,11 @@ class Restream:
         du, cu = self.uses()
         p = self.params
         dyn = [
-            dyn_streams(b, p, new, lazy=True) if u & changed else d
+            dyn_streams(b, p, new, lazy=self.lazy) if u & changed else d
             for b, u, d in zip(self.dyn, du, dyn, strict=True)
         ]
         con = [
-            con_streams(b, p, new, lazy=True) if u & changed else c
+            con_streams(b, p, new, lazy=self.lazy) if u & changed else c
             for b, u, c in zip(self.con, cu, con, strict=True)
         ]
         return dyn, con

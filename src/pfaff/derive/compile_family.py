@@ -10,38 +10,34 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from pfaff.core.lazy import LazySeq
-from pfaff.derive.compile import con_streams, dyn_streams, model_parameter_values
+import numpy as np
+
+from pfaff.core.lazy import NumberedNames
+from pfaff.derive.compile import (
+    Restream,
+    attitude_sets,
+    con_streams,
+    dyn_streams,
+    input_names,
+    model_parameter_values,
+)
 from pfaff.derive.equations import Derivation
 from pfaff.derive.geometry import build_geometry
 from pfaff.derive.memory import check_memory
 from pfaff.numeric.structured import StructuredModel
 
 
-def _names(eom: Derivation) -> LazySeq:
+def _names(eom: Derivation) -> NumberedNames:
     """Coordinate names as plain strings, made on demand (no SymPy object per family member)."""
     coords = eom.coordinates
-    fams = list(getattr(eom.system, "families", []))
+    fams = sorted(getattr(eom.system, "families", []), key=lambda f: f.offset)
     p = eom.n - sum(f.n for f in fams)
-
-    def name(i: int) -> str:
-        if i < p:
-            return str(coords[i].func)
-        for f in fams:
-            if f.offset <= i < f.offset + f.n:
-                return f"{f.name}{f.first + i - f.offset}"
-        return str(coords[i].func)
-
-    def bulk(lo: int, hi: int) -> list[str]:
-        out = [name(i) for i in range(lo, min(hi, p))]
-        for f in fams:
-            a, b = max(lo, f.offset), min(hi, f.offset + f.n)
-            if a < b:
-                d = f.first - f.offset
-                out += [f"{f.name}{j}" for j in range(a + d, b + d)]
-        return out
-
-    return LazySeq(eom.n, name, bulk)
+    head = [str(coords[i].func) for i in range(p)]
+    if any(f.offset < p for f in fams) or [f.offset for f in fams] != list(
+        np.cumsum([p] + [f.n for f in fams])[:-1]
+    ):
+        return NumberedNames([str(c.func) for c in coords], [])  # not laid out as runs
+    return NumberedNames(head, [(f.name, f.first, f.n) for f in fams])
 
 
 def structured_model(
@@ -66,8 +62,11 @@ def structured_model(
         parameters={p.name: v for p, v in zip(params, values, strict=True)},
         p=eom.n - sum(len(f) for f in getattr(eom.system, "families", [])),
         solver=solver,
+        inputs=input_names(eom),
+        attitudes=attitude_sets(eom),
+        geometry=build_geometry(eom, values),  # what Trajectory.animate draws
+        restream=Restream(eom, params, False, lazy=False),  # for model.with_parameters
     )
-    model.geometry = build_geometry(eom, values)  # what Trajectory.animate draws
     return model
 
 

@@ -25,6 +25,7 @@ from pfaff.core.symbols import accel, t
 from pfaff.derive import cache
 from pfaff.derive.engine import engine_safe
 from pfaff.numeric.fused import FusedKernel
+from pfaff.numeric.generated import Portable, register
 from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
 
 if TYPE_CHECKING:
@@ -108,17 +109,36 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
     ), status
 
 
-def _on_first_call(build: Callable[[], Callable | None]) -> Callable:
+class _on_first_call:
     """A function that generates the function ``build`` returns on its first call, then calls
-    it (``ValueError`` when it could not be generated)."""
-    made: list = []
+    it (``ValueError`` when it could not be generated). It pickles as that function."""
+
+    def __init__(self, build: Callable[[], Callable | None]) -> None:
+        self.build, self.made = build, None
+
+    def _get(self) -> Callable:
+        if self.made is None:
+            self.made = self.build()
+            self.build = None
+        if self.made is None:
+            raise ValueError("the generated function could not be made")
+        return self.made
+
+    def __call__(self, *args: object) -> object:
+        return self._get()(*args)
+
+    def __reduce__(self) -> tuple:
+        try:
+            return (Portable.load, (Portable.of(self._get()),))
+        except ValueError:
+            return (_unavailable, ())
+
+
+def _unavailable() -> Callable:
+    """A generated function that could not be made (it pickles as this)."""
 
     def call(*args: object) -> object:
-        if not made:
-            made.append(build())
-        if made[0] is None:
-            raise ValueError("the generated function could not be made")
-        return made[0](*args)
+        raise ValueError("the generated function could not be made")
 
     return call
 
@@ -336,7 +356,8 @@ def _function(name: str, args: list[str], body: list[str], outs: list[str], ns: 
          f"    return [{', '.join(outs)}]"]
     )  # fmt: skip
     namespace = dict(ns)
-    exec(compile(src + "\n", f"<pfaff.fused {name}>", "exec"), namespace)  # our own generated code
+    filename = register(src + "\n", f"fused {name}")  # (in linecache: it pickles as its source)
+    exec(compile(src + "\n", filename, "exec"), namespace)  # our own generated code
     return namespace[name]
 
 
@@ -498,7 +519,8 @@ def _rhs_function(
     )
     namespace = {**MATH, **NAMESPACE}
     try:
-        exec(compile(src + "\n", "<pfaff.fused rhs>", "exec"), namespace)  # our own generated code
+        filename = register(src + "\n", "fused rhs")  # (in linecache: it pickles as its source)
+        exec(compile(src + "\n", filename, "exec"), namespace)  # our own generated code
     except (SyntaxError, RecursionError):  # something the printer cannot write: the array path
         return None
     return namespace["make"]

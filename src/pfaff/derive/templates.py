@@ -103,6 +103,16 @@ def _particle_in(alg: Engine | Plain, m: sp.Expr, r: tuple, k: int) -> Local:
     return loc
 
 
+class _Back:
+    """SymEngine's entries back to SymPy, tidied (a class, not a closure: models pickle)."""
+
+    def __init__(self, alg: Engine) -> None:
+        self.alg = alg
+
+    def __call__(self, raw: object) -> object:
+        return _tidy(self.alg.back(raw))
+
+
 class _Kept:
     """Stores a template's entries: in SymEngine (``loc.engine``) as SymEngine made them, and
     in SymPy (tidied, zeros dropped) converted lazily (:class:`pfaff.derive.blocks.LazyEntries`)
@@ -113,7 +123,7 @@ class _Kept:
         self.lazy = isinstance(alg, Engine)
         if self.lazy:
             loc.engine = {"mass": {}, "h": {}, "kinetic": 0, "potential": 0, **energies}
-            convert = lambda raw: _tidy(alg.back(raw))  # noqa: E731
+            convert = _Back(alg)
             loc.mass = LazyEntries(loc.engine["mass"], convert)
             loc.h = LazyEntries(loc.engine["h"], convert)
 

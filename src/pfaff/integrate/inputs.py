@@ -3,9 +3,10 @@ supplies at every evaluation: a number, a function of time u(t), or a feedback l
 
 :class:`DrivenModel` wraps a compiled model: before each evaluation (the right-hand side, the
 projection, the DAE blocks, the reported states) it writes the inputs' values into the model's
-run-time parameter vector. That needs compiled code that takes its parameters at run time, which
-small and medium systems have (the fused kernel); models whose kernels fold the values in are
-refused with a clear error.
+run's own parameter vector (a run copy of the model: the user's model is never written). That
+needs compiled code that takes its parameters at run time, which small and medium systems have
+(the fused kernel, as generated Python or machine code: the right-hand side stays the generated
+one); models whose kernels fold the values in are refused with a clear error.
 """
 
 from __future__ import annotations
@@ -18,7 +19,6 @@ import numpy as np
 
 from pfaff.core.errors import OptionError, StateError
 from pfaff.numeric.checks import real_number
-from pfaff.numeric.protocol import OdeFunction
 
 
 def _arity(fn: Callable, name: str) -> int:
@@ -39,7 +39,11 @@ def _arity(fn: Callable, name: str) -> int:
 
 
 class DrivenModel:
-    """A compiled model whose inputs take values during a run (see the module docstring).
+    """A run of a compiled model whose inputs take values during it (see the module docstring).
+
+    It wraps a run copy (:meth:`pfaff.numeric.value.ModelValue.for_run`): the inputs' values are
+    written into the run's own parameter vector, never into the user's model, so a trajectory's
+    later evaluations (``traj.at(t)``) use the run's inputs and leave the model as it was.
 
     Examples
     --------
@@ -53,18 +57,21 @@ class DrivenModel:
     1.0
     """
 
-    def __init__(self, model: Any, inputs: Mapping[str, object]) -> None:
-        declared = list(getattr(model, "inputs", ()))
+    def __init__(self, run: Any, inputs: Mapping[str, object]) -> None:
+        declared = list(getattr(run, "inputs", ()))
         if not isinstance(inputs, Mapping):
             raise OptionError(f"`inputs` must be a dict of input name -> value, got {inputs!r:.60}")
-        p = getattr(model, "_p", None)
-        if getattr(model, "_fused", None) is None or p is None:
+        if not run._runtime_parameters():
             raise OptionError(
-                "inputs need a model whose compiled code takes its parameters at run time (small "
-                "and medium systems); this model folds them into its kernels"
+                "`inputs` need a model whose compiled code takes its parameters at run time "
+                "(the fused kernel of small and medium systems); this model "
+                f"(evaluator {getattr(run, 'evaluator', 'template')!r}) folds them into its "
+                "kernels: write the input into the model as a parameter and use "
+                "with_parameters, or compile with evaluator='python'"
             )
-        names = list(model.parameters)
-        self._model = model
+        names = list(run.parameters)
+        self._model = run
+        self._p: list[float] = run._p  # the run's own parameter vector
         self._base: list[float] = []  # the inputs' values at compile time (in the kernels)
         self._slots: list[tuple[int, str, int, object]] = []
         for name, u in inputs.items():
@@ -76,34 +83,26 @@ class DrivenModel:
             if name not in names:  # declared, but no equation uses it
                 continue
             i = names.index(name)
-            self._base.append(float(p[i]))
+            self._base.append(float(self._p[i]))
             if callable(u):
                 self._slots.append((i, name, _arity(u, name), u))
             else:
                 self._slots.append((i, name, 0, _value(u, name, None)))
-
-    def restore(self) -> None:
-        """Put back the values the inputs had before the run (the model is the user's)."""
-        p, params = self._model._p, self._model.parameters
-        for (i, name, *_), v in zip(self._slots, self._base, strict=True):
-            p[i] = v
-            params[name] = v
+        run._run_state["live"] = True
 
     def __getattr__(self, attr: str) -> Any:
         return getattr(self._model, attr)
 
     def set(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        """Write the inputs' values at (t, q, q̇) into the model's parameters."""
-        p, params = self._model._p, self._model.parameters
+        """Write the inputs' values at (t, q, q̇) into the run's parameter vector."""
+        p = self._p
         for i, name, kind, u in self._slots:
             if kind == 0:
-                v = u
+                p[i] = u  # type: ignore[assignment]
             elif kind == 1:
-                v = _value(u(t), name, t)  # type: ignore[operator]
+                p[i] = _value(u(t), name, t)  # type: ignore[operator]
             else:
-                v = _value(u(t, q, qd), name, t)  # type: ignore[operator]
-            p[i] = v
-            params[name] = v
+                p[i] = _value(u(t, q, qd), name, t)  # type: ignore[operator]
 
     # the methods of the DynamicsModel protocol, each after setting the inputs
     def solve(self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0):
@@ -135,29 +134,33 @@ class DrivenModel:
         return self._model.constraint_bias(t, q, qd)
 
     def ode_function(self, alpha: float = 0.0, beta: float = 0.0, start: tuple | None = None):
-        return _DrivenField(self, alpha, beta)
+        """The run's right-hand side with the inputs set before every evaluation: the same
+        generated (or machine) code as without inputs, reading the run's parameter vector."""
+        if start is not None:
+            self.set(*start)
+        return self._model.ode_function(alpha, beta, start, before=self.set)
 
     def power_function(self) -> Callable:
         """Qᵀq̇ of the applied forces with the inputs' values: the compiled power (whose
         kernels hold the inputs' values at compile time) plus q̇ᵀ(Q(u) − Q(u₀)), taken from the
         run-time forcing Q − h (exact when the inputs enter only applied forces, as forces and
         torques do: h does not depend on them)."""
-        model = self._model
+        model, p = self._model, self._p
         power = model.power_function()
         base = list(self._base)
 
-        def p(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        def pw(t: float, q: np.ndarray, qd: np.ndarray) -> float:
             self.set(t, q, qd)
             driven = np.array(model._kkt(t, q, qd)[1], dtype=float)
-            now = [model._p[i] for i, *_ in self._slots]
+            now = [p[i] for i, *_ in self._slots]
             for (i, *_), v in zip(self._slots, base, strict=True):
-                model._p[i] = v
+                p[i] = v
             at_base = np.array(model._kkt(t, q, qd)[1], dtype=float)
             for (i, *_), v in zip(self._slots, now, strict=True):
-                model._p[i] = v
+                p[i] = v
             return float(power(t, q, qd)) + float(qd @ (driven - at_base))
 
-        return p
+        return pw
 
     def evaluate_states(self, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> dict:
         """What a trajectory reports, state by state (the inputs change between them)."""
@@ -168,22 +171,6 @@ class DrivenModel:
         if not parts:
             return self._model.evaluate_states(t, q, qd)
         return {key: np.concatenate([d[key] for d in parts]) for key in parts[0]}
-
-
-class _DrivenField(OdeFunction):
-    """y' = [q̇, q̈] with the inputs set at every evaluation (no generated right-hand side: it
-    binds the parameter values when it is made)."""
-
-    def __init__(self, driven: DrivenModel, alpha: float, beta: float) -> None:
-        self.driven, self.alpha, self.beta = driven, alpha, beta
-        self.n = driven._model.n
-
-    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
-        q, qd = y[: self.n], y[self.n :]
-        qdd = self.driven.solve(t, q, qd, self.alpha, self.beta)[0]
-        if not np.isfinite(qdd).all():
-            raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-        return np.concatenate([qd, qdd])
 
 
 def _value(v: object, name: str, t: float | None) -> float:

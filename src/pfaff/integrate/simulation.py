@@ -30,6 +30,7 @@ from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.numeric.checks import check_model, check_state
 from pfaff.numeric.projection import Projector
 from pfaff.numeric.protocol import DynamicsModel
+from pfaff.numeric.value import single_threaded
 from pfaff.results.trajectory import Trajectory
 
 METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
@@ -281,6 +282,21 @@ def simulate(
     ((3, 2), 'success')
     """
     check_model(model)
+    with single_threaded():  # the run's thread policy (pfaff.numeric.value), set once
+        return _simulate(
+            model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
+            integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
+            project_output, progress, throw, inputs,
+        )  # fmt: skip
+
+
+def _simulate(
+    model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
+    integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
+    project_output, progress, throw, inputs,
+):  # fmt: skip
+    """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
+    model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
     if inputs:
         model = DrivenModel(model, inputs)
     t0, t1 = _span(t_span)
@@ -311,26 +327,20 @@ def simulate(
         opts["projector"] = projector
         stepper = METHODS[method](model, t0, q0a, qd0a, t1, opts)
     except (ValueError, ArithmeticError) as e:  # the user's equations, not defined at t0
-        if isinstance(model, DrivenModel):
-            model.restore()
         if isinstance(e, PfaffError) or not raised_in_generated_code(e):
             raise
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = method != "baumgarte"
     power = model.power_function() if model.applied_power else None
-    try:
-        run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
-        run.events = AttitudeEvents(getattr(model, "attitudes", ()))
-        run.restart = lambda t, q, qd: METHODS[method](model, t, q, qd, t1, opts)
-        status, message = run.go(q0a, qd0a)
-        if status != "success" and throw:
-            raise SimulationError(message)
-        stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
-        return _trajectory(model, method, run, status, message, stats, projector, project_output)
-    finally:
-        if isinstance(model, DrivenModel):
-            model.restore()
+    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
+    run.events = AttitudeEvents(getattr(model, "attitudes", ()))
+    run.restart = lambda t, q, qd: METHODS[method](model, t, q, qd, t1, opts)
+    status, message = run.go(q0a, qd0a)
+    if status != "success" and throw:
+        raise SimulationError(message)
+    stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
+    return _trajectory(model, method, run, status, message, stats, projector, project_output)
 
 
 class _Run:

@@ -17,7 +17,7 @@ from sympy.core.function import AppliedUndef
 from sympy.physics.vector import Vector
 
 from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError
-from pfaff.core.lazy import LazySeq, concat
+from pfaff.core.lazy import LazySeq, NumberedNames, concat
 from pfaff.core.symbols import (
     as_expr,
     is_coordinate_like,
@@ -221,7 +221,7 @@ class SystemSpec(ElementsMixin):
                 names.append((p.name,))
             else:
                 lo, label = p.template.lo, p.name
-                names.append(LazySeq(p.count, lambda j, lo=lo, label=label: f"{label} {lo + j}"))
+                names.append(NumberedNames([], [(f"{label} ", lo, p.count)]))
             flags.append(np.full(p.count, p.kind == "holonomic"))
         hol = np.concatenate(flags) if flags else np.zeros(0, dtype=bool)
         return concat(names), hol

@@ -17,8 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.projection import DAMPING, SHRUNK
 from pfaff.numeric.protocol import ConstraintLinearization
+
+_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug")
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,20 @@ class FusedKernel:
     acols: tuple[int, ...]
     llvm: Callable[..., Callable | None] | None = None
     rfn_aug: Callable | None = None
+
+    def __getstate__(self) -> dict:
+        """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);
+        machine code travels with the model (:class:`pfaff.numeric.evaluator.MachineCode`)."""
+        state = dict(self.__dict__)
+        for key in _FUNCTIONS:
+            state[key] = portable(state[key])
+        state["llvm"] = None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        for key in _FUNCTIONS:
+            state[key] = loaded(state[key])
+        self.__dict__.update(state)
 
     def entries(self, K: np.ndarray) -> list[float]:
         """The M and A entries of an assembled K, as the arguments of ``cfn``."""

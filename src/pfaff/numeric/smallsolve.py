@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from pfaff.numeric.generated import register
 from pfaff.numeric.kkt import floored
 
 Entry = str | None  # a variable name, or None for a structural zero
@@ -132,7 +133,7 @@ def schur_solver(
     args = ", ".join(Ms + As + Fs + cs + (["shift"] if damped else []))
     src = f"def solve({args}):\n" + "\n".join(lines) + f"\n    return [{', '.join(out)}]\n"
     namespace: dict = dict(NAMESPACE)
-    exec(compile(src, "<pfaff.smallsolve>", "exec"), namespace)  # our own generated code
+    exec(compile(src, register(src, "smallsolve"), "exec"), namespace)  # our own generated code
     return namespace["solve"]
 
 

@@ -22,6 +22,7 @@ import numpy as np
 import scipy.linalg.blas as blas
 
 from pfaff.core.errors import raised_in_generated_code, undefined_at
+from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.trig import sincos, workspace
 
 CHUNK = 1 << 15  # instances per kernel call
@@ -279,6 +280,17 @@ class StreamCode:
     angles: tuple = ()
     params: tuple = ()
 
+    def __getstate__(self) -> dict:
+        """The generated functions travel as their source (:mod:`pfaff.numeric.generated`)."""
+        state = dict(self.__dict__)
+        state["fn"], state["angle_fn"] = portable(self.fn), portable(self.angle_fn)
+        state["angles"] = tuple(str(a) for a in self.angles)  # (their count is what runs need)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        state["fn"], state["angle_fn"] = loaded(state["fn"]), loaded(state["angle_fn"])
+        self.__dict__.update(state)
+
 
 class StreamKernel:
     """Outputs of one template over all its instances; constants folded at build time.
@@ -333,7 +345,21 @@ class StreamKernel:
         self._bind(make())
         return getattr(self, name)
 
+    def __getstate__(self) -> dict:
+        """Its columns and code (generated now if it was not yet): no work arrays."""
+        code = self.__dict__.get("_code")
+        if code is None:
+            make = self.__dict__.pop("_make")
+            self._bind(make())
+            code = self._code
+        return {"columns": self.columns, "count": self.count, "code": code, "chunk": self.chunk}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["columns"], state["code"], state["count"])  # type: ignore[misc]
+        self.chunk = state["chunk"]
+
     def _bind(self, code: StreamCode) -> None:
+        self._code = code
         self.varying = list(code.varying)
         self.const: list[float | None] = list(code.const)
         self.angles = code.angles

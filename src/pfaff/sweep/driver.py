@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import pickle
 import socket
 import sys
 import time
@@ -24,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import OptionError
+from pfaff.core.errors import OptionError, PfaffError
 from pfaff.modelfile import ModelFile, load_model
 from pfaff.sweep.grid import make_grid
 from pfaff.sweep.result import Results
@@ -147,6 +148,7 @@ def sweep(
         grid=grid,
         t_eval=np.linspace(0.0, t_end, samples),
         options=options,
+        model=shipped_model(mf),
     )
     if workers is not None and (
         isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1
@@ -167,6 +169,20 @@ def sweep(
         "wall_seconds": time.perf_counter() - start,
     }
     return results.dataset(spec.t_eval, attrs)
+
+
+def shipped_model(mf: ModelFile) -> bytes | None:
+    """The file's model derived and compiled once, here, and pickled for the workers (each
+    unpickles it once per process instead of deriving and compiling the file); None when it
+    does not compile with the file's values (each run then reports why)."""
+    system = mf.system
+    try:
+        eom = system.equations()
+        used = {s.name for s in eom.parameters}
+        model = eom.compile({k: v for k, v in mf.parameters.items() if k in used})
+    except PfaffError:
+        return None
+    return pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def _load(model: object) -> tuple[ModelFile, str]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import pickle
 import tempfile
 import threading
 import time
@@ -53,6 +54,9 @@ class SweepSpec:
     t_eval : ndarray, shape (samples,)
     options : dict
         Keyword arguments of :func:`pfaff.simulate` (method, tolerances, ...).
+    model : bytes or None
+        The compiled model, pickled by the driver (:func:`pfaff.sweep.driver.shipped_model`);
+        None: each worker process derives and compiles the file itself.
     """
 
     text: str
@@ -64,11 +68,14 @@ class SweepSpec:
     grid: Grid
     t_eval: np.ndarray
     options: dict[str, Any] = field(default_factory=dict)
+    model: bytes | None = None
 
     @property
     def key(self) -> str:
-        """SHA-256 of the file's text: the compiled model's key in a worker's cache."""
-        return hashlib.sha256(self.text.encode()).hexdigest()
+        """SHA-256 of the file's text and the shipped model: the key in a worker's cache."""
+        digest = hashlib.sha256(self.text.encode())
+        digest.update(self.model or b"")
+        return digest.hexdigest()
 
     def run_inputs(self, i: int) -> tuple[dict[str, float], np.ndarray, np.ndarray]:
         """Parameter values, q0 and q̇0 of run ``i``."""
@@ -89,28 +96,28 @@ class _Compiled:
     """A model file loaded and derived in this process, and its first compiled model."""
 
     def __init__(self, spec: SweepSpec) -> None:
+        self.base: Any = None
+        if spec.model is not None:  # compiled by the driver: nothing derived here
+            self.base = pickle.loads(spec.model)  # (pfaff's own pickle, made by the driver)
+            self.used = set(self.base.parameters)
+            self.lock = threading.Lock()
+            return
         with tempfile.TemporaryDirectory(prefix="pfaff-sweep-") as tmp:
             path = Path(tmp) / (Path(spec.filename).name or "model.toml")
             path.write_text(spec.text, encoding="utf-8")
             self.file: ModelFile = load_model(path, max_bytes=max(len(spec.text.encode()), 1))
         self.eom = self.file.system.equations()
         self.used = {s.name for s in self.eom.parameters}
-        self.base: Any = None
-        self.last: tuple[dict, Any] = ({}, None)  # the last values compiled (families)
         self.lock = threading.Lock()
 
     def model(self, params: dict[str, float]) -> Any:
-        """The compiled model with these values: the first compile, then ``with_parameters``
-        (models without it, over families, are compiled again for each new set of values)."""
+        """The compiled model with these values: the shipped (or first compiled) model's
+        ``with_parameters``, general models and families alike."""
         values = {k: v for k, v in params.items() if k in self.used}
         if self.base is None:
             self.base = self.eom.compile(values)
             return self.base
-        if getattr(self.base, "_restream", None) is not None:
-            return self.base.with_parameters(values)
-        if values != self.last[0]:
-            self.last = (values, self.eom.compile(values))
-        return self.last[1]
+        return self.base.with_parameters(values)
 
 
 def compiled(spec: SweepSpec) -> _Compiled:

@@ -1,0 +1,159 @@
+"""How a general model evaluates a state: one of three evaluators, chosen by rule.
+
+``"template"``
+    The template kernels (:class:`pfaff.numeric.streams.StreamKernel`, NumPy over index arrays)
+    and a LAPACK solve: every model has them.
+``"python"``
+    The fused kernel (:class:`pfaff.numeric.fused.FusedKernel`): the whole system as one
+    generated Python function on floats, and the range-space solve as generated code.
+``"machine"``
+    The same right-hand side compiled to machine code by SymEngine's LLVM (built on first use,
+    kept in the on-disk cache).
+
+The rule (:func:`choose`): the template kernels where there is no fused kernel (too large, a
+solver other than ``range-space``, or a function the printer cannot write); else machine code
+from :data:`MACHINE_FROM` unknowns n + m on, where one call of it (about 17–20 µs, most of it the
+call's own overhead) beats the generated Python, which costs 1 µs on a pendulum, 9 µs at n + m = 4
+and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
+else the generated Python. No timing decides anything at run time: the same model, state and
+options take the same path in every process. ``compile(..., evaluator=...)`` overrides the rule.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import warnings
+from collections.abc import Callable
+
+import numpy as np
+
+from pfaff.core.errors import OptionError
+
+EVALUATORS = ("template", "python", "machine")
+MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
+
+
+def choose(
+    requested: str | None, n: int, m: int, has_fused: bool, why_not: str, has_machine: bool
+) -> str:
+    """The evaluator of a model: ``requested`` if it is possible, else the rule's.
+
+    Parameters
+    ----------
+    requested : {None, "template", "python", "machine"}
+    n, m : int
+        Coordinates and constraints.
+    has_fused : bool
+        Whether the model has a fused kernel; ``why_not`` says why not.
+    has_machine : bool
+        Whether the fused kernel can be compiled to machine code (SymEngine has LLVM).
+
+    Examples
+    --------
+    >>> choose(None, 1, 0, True, "", True), choose(None, 6, 3, True, "", True)
+    ('python', 'machine')
+    >>> choose("template", 6, 3, True, "", True)
+    'template'
+    """
+    if requested is not None and requested not in EVALUATORS:
+        raise OptionError(
+            f"`evaluator` must be one of {', '.join(EVALUATORS)}; got {requested!r:.80}"
+        )
+    if requested == "template":
+        return "template"
+    if not has_fused:
+        if requested is not None:
+            raise OptionError(f"`evaluator`: {requested!r} needs the fused kernel, and {why_not}")
+        return "template"
+    if requested == "machine" and not has_machine:
+        raise OptionError("`evaluator`: 'machine' needs SymEngine built with LLVM, and it is not")
+    if requested is not None:
+        return requested
+    return "machine" if has_machine and n + m >= MACHINE_FROM else "python"
+
+
+class MachineCode:
+    """The machine code of a fused kernel, made once (on first use) and shared by every model
+    built from the same parts (``with_parameters`` copies, run copies, unpickled copies).
+
+    ``get()`` returns the compiled function, or None after warning once with the reason (the
+    model then evaluates with the generated Python).
+    """
+
+    def __init__(self, build: Callable[[], Callable | None] | None) -> None:
+        self._build = build
+        self._lock = threading.Lock()
+        self._done = False
+        self.compiled: Callable | None = None
+        self.seconds = 0.0
+
+    def get(self, check: Callable[[Callable], str]) -> Callable | None:
+        """The compiled function, checked once by ``check`` (returns "" when it agrees)."""
+        if self._done:
+            return self.compiled
+        with self._lock:
+            if not self._done:
+                self.compiled = self._make(check)
+                self._done = True
+        return self.compiled
+
+    def _make(self, check: Callable[[Callable], str]) -> Callable | None:
+        import time
+
+        start = time.process_time()
+        reason = ""
+        compiled = None
+        if self._build is None:
+            reason = "SymEngine has no LLVM"
+        else:
+            try:
+                compiled = self._build()
+            except (RuntimeError, ValueError, TypeError, MemoryError) as e:
+                reason = f"{type(e).__name__}: {e}"
+            if compiled is None and not reason:
+                reason = "SymEngine could not compile it"
+            if compiled is not None:
+                reason = check(compiled)
+        self.seconds = time.process_time() - start
+        if reason:
+            warnings.warn(
+                f"pfaff: machine code unavailable ({reason}); evaluating with the generated "
+                "Python code instead",
+                RuntimeWarning,
+                stacklevel=4,
+            )
+            return None
+        return compiled
+
+    def __getstate__(self) -> dict:
+        return {"compiled": self.compiled if self._done else None, "done": self._done}
+
+    def __setstate__(self, state: dict) -> None:
+        self._build, self._lock, self.seconds = None, threading.Lock(), 0.0
+        self.compiled, self._done = state["compiled"], state["done"]
+
+
+def machine_rhs(
+    compiled: Callable, py: Callable, n: int, fixed: list, live: list | None = None
+) -> Callable:
+    """The machine-code right-hand side on lists, ``py`` (the generated Python) where it gives
+    anything non-finite (M not positive definite, a value out of its domain: ``py`` then takes
+    the slow path or names the error). The compiled function's first 2n outputs are [q̇, q̈].
+    ``fixed`` = [params, alpha, beta, taus, cap]; ``live``: a run's parameter vector, read at
+    every call (inputs change it during a run)."""
+    buf = np.empty(1 + 2 * n + len(fixed))
+    buf[1 + 2 * n :] = fixed
+    isfinite = math.isfinite
+    k = 2 * n
+    p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+
+    def rhs(t: float, yl: list) -> list:
+        buf[0] = t
+        buf[1 : 1 + 2 * n] = yl
+        if live is not None:
+            buf[p0:p1] = live
+        out = compiled(buf)[:k].tolist()
+        return out if isfinite(sum(out)) else py(t, yl)
+
+    return rhs

@@ -1,0 +1,275 @@
+"""The parts of a general model beyond the template streams: solvers, the fused kernel, the evaluator.
+
+:class:`GeneralParts` is the constructor half of :class:`pfaff.NumericModel`: it takes the parts
+the compile stage made, checks the fused kernel once, fixes the evaluator by rule
+(:mod:`pfaff.numeric.evaluator`), and knows how to rebuild the model for other parameter values,
+for a run and after unpickling. The evaluation itself is in :mod:`pfaff.numeric.model`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pfaff.core.errors import ConstraintError, PfaffError
+from pfaff.numeric.evaluator import MachineCode, choose
+from pfaff.numeric.kkt import STATE_FLOOR, augmentation_weight, solve_floored
+from pfaff.numeric.solvers import general_solver
+
+if TYPE_CHECKING:
+    from pfaff.numeric.fused import FusedKernel
+    from pfaff.numeric.model import NumericModel
+    from pfaff.numeric.parts import ConStreams, DynStreams
+
+DENSE_LIMIT = 400  # n + m up to which the KKT system is assembled and solved densely
+
+
+class GeneralParts:
+    """Construction of :class:`pfaff.NumericModel` (see the module docstring)."""
+
+    _fused: FusedKernel | None
+    _machine_code: MachineCode | None
+
+    def __init__(
+        self,
+        n: int,
+        m: int,
+        dyn: list[DynStreams],
+        con: list[ConStreams],
+        *,
+        coordinate_names: list[str],
+        multiplier_names: list[str],
+        constraint_names: list[str],
+        holonomic: np.ndarray,
+        parameters: dict[str, float],
+        solver: str | None = None,
+        fused: FusedKernel | None = None,
+        fused_missing: str = "the model has none",
+        evaluator: str | None = None,
+        machine_code: MachineCode | None = None,
+        **fields: Any,
+    ) -> None:
+        super().__init__(  # type: ignore[call-arg]
+            n, m, dyn, con, coordinate_names=coordinate_names, constraint_names=constraint_names,
+            holonomic=holonomic, parameters=parameters, multiplier_names=multiplier_names,
+            **fields,
+        )  # fmt: skip
+        self._p = tuple(self.parameters.values())  # in the order of the fused kernel's arguments
+        self._holonomic_list: list[bool] = self.holonomic.tolist()
+        if solver is None:
+            solver = "range-space" if n + m <= DENSE_LIMIT else "sparse"
+        self.solver = solver
+        self.dense = solver != "sparse"
+        self._solver, self._lu = general_solver(solver, n, m)
+        self._pattern = None
+        why = fused_missing
+        if fused is not None and solver != "range-space":
+            fused, why = None, f"the solver is {solver!r} (the fused kernel's solve is range-space)"
+        if fused is not None and machine_code is None:
+            fused, why = self._checked_fused(fused)
+        has_machine = fused is not None and fused.llvm is not None
+        self.evaluator = choose(evaluator, n, m, fused is not None, why, has_machine)
+        self._fused = None if self.evaluator == "template" else fused
+        self._fused_kernel = fused  # kept for with_parameters (shared as it is)
+        if machine_code is None and has_machine:
+            machine_code = MachineCode(fused.llvm)  # type: ignore[union-attr]
+        self._machine_code = machine_code
+        self.timings["evaluator"] = self.evaluator
+        if self.evaluator == "template" and why:
+            self.timings["evaluator_reason"] = why
+        self._freeze()  # type: ignore[attr-defined]
+
+    # ------------------------------------------------------------------ the fused kernel
+    def _checked_fused(self, fused: FusedKernel) -> tuple[FusedKernel | None, str]:
+        """``fused`` if it gives finite real outputs at a random state, with ``rfn`` dropped
+        when it disagrees with the array solve of those outputs; else None and the reason."""
+        model: NumericModel = self  # type: ignore[assignment]
+        rng = np.random.default_rng(7)
+        t0, q, qd = 0.3, rng.uniform(0.2, 0.9, model.n), rng.uniform(-0.5, 0.5, model.n)
+        try:
+            v = np.array(fused.fn(t0, *q.tolist(), *qd.tolist(), *model._p))
+        except (ValueError, ArithmeticError, TypeError, NameError) as e:  # NameError: a function
+            # the printer wrote but the generated code's namespace lacks (sign, Heaviside, ...)
+            return None, f"the fused kernel failed at a test state ({type(e).__name__}: {e})"
+        if v.dtype.kind != "f" or not np.isfinite(v).all():
+            return None, "the fused kernel is not finite and real at a test state"
+        object.__setattr__(self, "_fused", dataclasses.replace(fused, rfn=None))
+        object.__setattr__(self, "_run_state", self._new_run_state())
+        object.__setattr__(self, "_machine_code", None)
+        object.__setattr__(self, "evaluator", "python")
+        try:
+            slow = model._reference_solve(t0, q, qd)[0]
+            fast = None
+            if fused.rfn is not None:
+                taus = [0.0] * (model.m + 1)  # no floor
+                fast = fused.rfn(*model._p, 0.0, 0.0, *taus, lambda t, y: None)(
+                    t0, [*q.tolist(), *qd.tolist()]
+                )
+        except (PfaffError, ValueError, ArithmeticError, TypeError, np.linalg.LinAlgError):
+            return dataclasses.replace(fused, rfn=None), ""
+        if fast is not None and np.allclose(fast[model.n :], slow, rtol=1e-10, atol=1e-13):
+            return fused, ""
+        return dataclasses.replace(fused, rfn=None), ""
+
+    def _reference_solve(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
+        """q̈, λ by the model's solver, or by LU on the whole augmented matrix where M is
+        singular (quaternion coordinates): the reference generated code is checked against."""
+        model: NumericModel = self  # type: ignore[assignment]
+        try:
+            return model._solve(t, q, qd)
+        except PfaffError:
+            K, forcing, _, bias, _, _ = model._kkt(t, q, qd)
+            return model._solve_kkt(K, forcing, -bias, t, full=True)
+
+    # ------------------------------------------------------------------ machine code
+    def _machine(self) -> Callable | None:
+        """The machine code when it is the evaluator (made on first use), else None."""
+        if self.evaluator != "machine" or self._machine_code is None:
+            return None
+        return self._machine_code.get(self._machine_agrees)
+
+    def _machine_agrees(self, compiled: Callable) -> str:
+        """ "" when the machine code agrees with ``fn`` and the array solve at a random state,
+        else the reason."""
+        model: NumericModel = self  # type: ignore[assignment]
+        n, m, fk, p = model.n, model.m, self._fused, model._p
+        assert fk is not None
+        buf = np.zeros(1 + 2 * n + len(p) + 2 + m + 1)
+        buf[1 + 2 * n : 1 + 2 * n + len(p)] = p
+        rng = np.random.default_rng(11)
+        t0, q, qd = 0.4, rng.uniform(0.2, 0.9, n), rng.uniform(-0.5, 0.5, n)
+        buf[0], buf[1 : 1 + n], buf[1 + n : 1 + 2 * n] = t0, q, qd
+        python = self.for_run()  # type: ignore[attr-defined]
+        python.__dict__["evaluator"] = "python"  # the reference: the generated Python code
+        try:
+            out = np.array(compiled(buf), dtype=float)
+            v = np.array(fk.fn(t0, *q.tolist(), *qd.tolist(), *p), dtype=float)
+            qdd, lam = python._reference_solve(t0, q, qd)
+        except (PfaffError, ValueError, ArithmeticError, TypeError, RuntimeError) as e:
+            return f"it could not be checked at a test state: {type(e).__name__}: {e}"
+        k = 2 * n + m
+        ok = out.shape == (k + v.size,) and np.allclose(out[k:], v, rtol=1e-11, atol=1e-13)
+        ok = ok and np.allclose(out[n : 2 * n], qdd, rtol=1e-9, atol=1e-12)
+        ok = ok and np.allclose(out[2 * n : k], lam, rtol=1e-9, atol=1e-12)
+        return "" if ok else "it disagrees with the generated Python code at a test state"
+
+    def compile_machine_code(self) -> bool:
+        """Compile (or load from the on-disk cache) the machine code now, so that the first
+        evaluation does not pay for it; False when this model does not evaluate with machine
+        code (its evaluator is ``"python"`` or ``"template"``, or SymEngine has no LLVM).
+
+        The evaluator is fixed when the model is compiled (``compile(..., evaluator=...)``):
+        this only moves the machine code's one-time cost to now.
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
+        >>> model.evaluator, model.compile_machine_code()
+        ('python', False)
+        """
+        ok = self._machine() is not None
+        if ok and self._machine_code is not None:
+            self.timings.setdefault("machine_code", self._machine_code.seconds)  # type: ignore[attr-defined]
+        return ok
+
+    def _runtime_parameters(self) -> bool:
+        return self._fused is not None
+
+    # ------------------------------------------------------------------ copies
+    def _new_run_state(self) -> dict:
+        state = {"full": False, "rho": 0.0, "last": None, "live": False}
+        n, m = self.n, self.m  # type: ignore[attr-defined]
+        state["buf"] = np.zeros(1 + 2 * n + len(self.parameters) + 2 + m + 1)  # type: ignore[attr-defined]
+        return state
+
+    def _fresh_run_parts(self) -> None:
+        super()._fresh_run_parts()  # type: ignore[misc]
+        d = self.__dict__
+        d["_solver"], d["_lu"] = general_solver(d["solver"], d["n"], d["m"])
+
+    def __getstate__(self) -> dict:
+        self._machine()  # the machine code travels made (the receiver may lack the compiler)
+        return super().__getstate__()  # type: ignore[misc]
+
+    def _unpickled(self) -> set[str]:
+        return super()._unpickled() | {"_solver", "_lu"}  # type: ignore[misc]
+
+    def _restored(self) -> None:
+        super()._restored()  # type: ignore[misc]
+        d = self.__dict__
+        d["_solver"], d["_lu"] = general_solver(d["solver"], d["n"], d["m"])
+
+    def _rebuilt(self, parameters: dict[str, float]) -> NumericModel:
+        from pfaff.numeric.model import NumericModel
+
+        model: NumericModel = self  # type: ignore[assignment]
+        dyn, con = model.dyn, model.con
+        old, new = list(model.parameters.values()), list(parameters.values())
+        if new != old:  # new kernels for the templates that use a changed value
+            dyn, con = model._restream(old, new, dyn, con)
+        geometry = model.geometry
+        if geometry is not None and new != old:
+            geometry = geometry.with_parameters(parameters)  # type: ignore[attr-defined]
+        return NumericModel(
+            model.n, model.m, dyn, con, coordinate_names=model.coordinate_names,
+            multiplier_names=model.multiplier_names, constraint_names=model.constraint_names,
+            holonomic=model.holonomic, parameters=parameters, solver=model.solver,
+            fused=self._fused_kernel, evaluator=model.evaluator,
+            machine_code=self._machine_code, inputs=model.inputs, attitudes=model.attitudes,
+            geometry=geometry, linearizer=model.linearizer, restream=model._restream,
+            timings=model.timings,
+        )  # fmt: skip
+
+
+def augmentation(
+    model: NumericModel, K: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray
+) -> float:
+    """ρ of the generated solve with M + ρAᵀA (``rfn_aug``) for a singular M, checked
+    against the LU solve of the whole augmented matrix at this state; 0 when unusable."""
+    fk, n = model._fused, model.n
+    if fk is None or fk.rfn_aug is None or not model.m:
+        return 0.0
+    M, A = K[:n, :n], K[n:, :n]
+    rho = augmentation_weight(M, A)
+    try:
+        fn = fk.rfn_aug(*model._p, 0.0, 0.0, *([0.0] * (model.m + 1)), rho, lambda t, y: None)
+        fast = fn(t, [*q.tolist(), *qd.tolist()])
+        slow = model._solve(t, q, qd)[0]
+    except (PfaffError, ValueError, ArithmeticError, TypeError, np.linalg.LinAlgError):
+        return 0.0  # the generated augmented solve is not usable here: LU on K
+    if fast is None or not np.allclose(fast[n:], slow, rtol=1e-9, atol=1e-12):
+        return 0.0
+    return rho
+
+
+def fused_states(
+    model: NumericModel, t: np.ndarray, q: np.ndarray, qd: np.ndarray
+) -> dict[str, np.ndarray]:
+    """:meth:`pfaff.NumericModel.evaluate_states` of a fused model: the NumPy kernel over all
+    states at once and a batched floored solve."""
+    fk, k, n, N = model._fused, len(t), model.n, model.n + model.m
+    assert fk is not None
+    args = [t, *q.T, *qd.T, *model._p]
+    vals = np.empty((k, fk.offsets[3] + model.m))
+    for i, o in enumerate(fk.vfn(*args)):
+        vals[:, i] = o
+    K = np.zeros((k, N * N))
+    K[:, fk.kkt_index] = vals[:, fk.kkt_source]
+    K = K.reshape(k, N, N)
+    o = fk.offsets
+    qdd, lam = solve_floored(
+        K[:, :n, :n], K[:, n:, :n], vals[:, o[0] : o[1]], vals[:, o[1] : o[2]], STATE_FLOOR
+    )
+    if not (np.isfinite(qdd).all() and np.isfinite(lam).all()):
+        raise ConstraintError(model._singular_message(float(t[0])))
+    g = np.einsum("kij,kj->ki", K[:, n:, :n], qd) + vals[:, o[2] : o[3]]
+    T, V, T0 = (np.broadcast_to(e, (k,)).astype(float) for e in fk.efn(*args))
+    Tneg = np.broadcast_to(fk.efn(t, *q.T, *(-qd).T, *model._p)[0], (k,))
+    T2 = 0.5 * (T + Tneg) - T0
+    model.stats["kkt_solves"] += k
+    return {"qdd": qdd, "multipliers": lam, "f": vals[:, o[3] :], "g": g, "T": T, "V": V,
+            "T0": T0, "T2": T2}  # fmt: skip
