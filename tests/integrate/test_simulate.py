@@ -365,8 +365,9 @@ def test_bad_state(pend: pfaff.NumericModel, q0, qd0, match: str) -> None:
 )
 def test_bad_options(pend: pfaff.NumericModel, kwargs: dict, match: str) -> None:
     kw = {"t_span": (0.0, 1.0), **kwargs}
-    with pytest.raises(pfaff.StateError, match=match):
+    with pytest.raises(pfaff.OptionError, match=match) as info:
         pfaff.simulate(pend, Q0, QD0, **kw)
+    assert not isinstance(info.value, pfaff.StateError)  # one meaning per error class
 
 
 def _particle(force: sp.Expr) -> pfaff.NumericModel:

@@ -156,17 +156,17 @@ def test_bad_input(pendulum) -> None:
     traj = pfaff.simulate(pendulum, [1.1, 0.0], [0.0, 0.0], (0, 0.1), project_initial=True)
     assert abs(traj.q[0] @ traj.q[0] - L**2) < 1e-12
     for span, word in (((1, 0), "reversed"), ((1, 1), "empty")):
-        with pytest.raises(pfaff.StateError, match=word):
+        with pytest.raises(pfaff.OptionError, match=word):
             pfaff.simulate(pendulum, *ok, span)
     with pytest.raises(pfaff.StateError, match="NaN"):
         pfaff.simulate(pendulum, [np.nan, 0.0], [0.0, 0.0], (0, 1))
     with pytest.raises(pfaff.StateError, match=r"shape \(2,\)"):
         pfaff.simulate(pendulum, [1.0, 0.0, 0.0], [0.0, 0.0], (0, 1))
-    with pytest.raises(pfaff.StateError, match="unknown method"):
+    with pytest.raises(pfaff.OptionError, match="unknown method"):
         pfaff.simulate(pendulum, *ok, (0, 1), method="euler")
-    with pytest.raises(pfaff.StateError, match="inside t_span"):
+    with pytest.raises(pfaff.OptionError, match="inside t_span"):
         pfaff.simulate(pendulum, *ok, (0, 1), t_eval=[0.5, 2.0])
-    with pytest.raises(pfaff.StateError, match="integrator"):
+    with pytest.raises(pfaff.OptionError, match="integrator"):
         pfaff.simulate(pendulum, *ok, (0, 1), integrator="Radau")
 
 
