@@ -28,6 +28,7 @@ from pfaff.core.symbols import coordinates, t
 from pfaff.derive.work import ForceWork
 from pfaff.integrate.initial import consistent_state
 from pfaff.integrate.simulation import simulate
+from pfaff.integrate.stepper import Stepper, StepperOptions
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 from pfaff.mechanics.bodies import Body
 from pfaff.modelfile import ModelFile, ModelFileError, load_model
@@ -60,6 +61,8 @@ __all__ = [
     "SimulationError",
     "Solution",
     "StateError",
+    "Stepper",
+    "StepperOptions",
     "System",
     "Trajectory",
     "attitude",

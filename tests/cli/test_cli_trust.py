@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 import pfaff
+from methods import ALL_METHODS
 from pfaff.cli import main
 
 HUGE = "2147483647"  # 2^31 - 1 particles: hundreds of GiB to solve
@@ -329,7 +330,7 @@ def test_pendulum_release_text_reference_holds_at_any_angle(
     assert "rod tension −2Lλ = -9.81" in text and "m g cos θ₀ = -9.81" in text
 
 
-@pytest.mark.parametrize("method", ["ida", "projection", "baumgarte"])
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_summary_shows_only_statistics_that_exist(
     method: str, capsys: pytest.CaptureFixture[str]
 ) -> None:

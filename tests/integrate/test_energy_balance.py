@@ -6,11 +6,10 @@ import numpy as np
 import pytest
 
 import pfaff
+from methods import ALL_METHODS
 
-METHODS = ("projection", "baumgarte", "ida")
 
-
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_pushed_ring_work_is_force_times_distance(method: str) -> None:
     """The push F on the centre does work F·Δx; the balance stays at integration-error level."""
     n, F = 6, 2.0

@@ -28,6 +28,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import pfaff
+from methods import ALL_METHODS
 
 P = {"a": 1.0, "L": 2.0, "m1": 1.0, "m2": 2.0, "m3": 1.0, "g": 9.81}
 TH0, W0, T_END = 0.3, 8.0, 2.0  # passes θ = π, 2π, 3π, 4π (≈ 2.3 turns)
@@ -107,7 +108,7 @@ def _check_branch(traj: pfaff.Trajectory, te: np.ndarray, tol: float) -> None:
     assert np.abs(traj.qd[:, 0] - w).max() < 1e3 * tol
 
 
-@pytest.mark.parametrize("method", ["projection", "baumgarte", "ida"])
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_before_first_fold(model: pfaff.NumericModel, method: str) -> None:
     """Every method follows the branch up to (just before) the first flat configuration."""
     t1 = 0.98 * fold_times()[0]

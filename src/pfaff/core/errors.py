@@ -60,10 +60,11 @@ class StateError(PfaffError):
     """A numeric state (t, q, q̇) has the wrong shape or is not finite."""
 
 
-class OptionError(StateError):
+class OptionError(PfaffError):
     """An option of a numeric entry point (a tolerance, a method, a step size) is invalid.
 
-    A :class:`StateError` too, for code written before options had their own class.
+    Not a :class:`StateError`: a state is what a run starts from or computes, an option how it
+    is computed.
     """
 
 

@@ -25,9 +25,10 @@ import numpy as np
 import scipy.sparse as sps
 
 from pfaff.core.errors import PfaffError
+from pfaff.integrate.stepper import Power, Stepper, StepperOptions
 from pfaff.integrate.work import hermite_work
 from pfaff.numeric.kkt import augmentation_weight
-from pfaff.numeric.projection import diagonal_weights
+from pfaff.numeric.projection import Projector, diagonal_weights
 from pfaff.numeric.protocol import DynamicsModel
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
@@ -39,10 +40,21 @@ EPS = float(np.finfo(float).eps)
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
 
 
-class IDAStepper:
-    """IDA driven one internal step at a time (same contract as the Runge–Kutta steppers)."""
+class IDAStepper(Stepper):
+    """IDA driven one internal step at a time (a :class:`~pfaff.integrate.stepper.Stepper`)."""
 
-    def __init__(self, model: DynamicsModel, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+    name = "ida"
+
+    def __init__(
+        self,
+        model: DynamicsModel,
+        t0: float,
+        q0: np.ndarray,
+        qd0: np.ndarray,
+        t_end: float,
+        opts: StepperOptions,
+        projector: Projector,
+    ) -> None:
         try:
             from sksundae.ida import IDA
         except ImportError as e:  # pragma: no cover - a declared dependency
@@ -56,12 +68,12 @@ class IDAStepper:
         self.fd = self._finite_differences(opts)
         self._ref, self._ref_h = np.zeros(m), np.zeros(mh)  # rows' largest sizes so far
         alg = list(range(2 * n, self.size))
-        atol = np.full(self.size, float(opts["atol"]))
+        atol = np.full(self.size, float(opts.atol))
         atol[alg] = 1e12  # algebraic variables: out of the error test
-        kw = {k: opts[k] for k in ("max_step", "first_step") if opts.get(k) is not None}
+        kw = opts.step_sizes()
         self.solver = IDA(
             self._residual,
-            rtol=float(opts["rtol"]),
+            rtol=float(opts.rtol),
             atol=atol,
             algebraic_idx=alg or None,
             jacfn=self._jacobian,
@@ -83,9 +95,9 @@ class IDAStepper:
         self._last = res
         self.stats = {"steps": 0, "rejected": None, "nfev": 0, "njev": 0}
 
-    def _finite_differences(self, opts: dict) -> bool:
+    def _finite_differences(self, opts: StepperOptions) -> bool:
         """Difference columns for small systems: exact, and 2n residuals per Newton matrix."""
-        choice = opts.get("ida_jacobian") or ("fd" if self.size <= FD_LIMIT else "approximate")
+        choice = opts.ida_jacobian or ("fd" if self.size <= FD_LIMIT else "approximate")
         return choice == "fd"
 
     # ------------------------------------------------------------------ residual and Newton matrix
@@ -168,7 +180,7 @@ class IDAStepper:
     # ------------------------------------------------------------------ stepping contract
     def _check(self, res: Any) -> None:
         if res.status < 0:
-            raise PfaffError(f"IDA failed at t = {float(res.t):.17g}: {res.message}")
+            self.fail(f"IDA failed at t = {float(res.t):.17g}: {res.message}")
 
     @property
     def t(self) -> float:
@@ -194,19 +206,17 @@ class IDAStepper:
         try:
             return fn(*args, **kw)
         except KeyError as e:
-            raise PfaffError(
+            Stepper.fail(
                 f"IDA stopped with SUNDIALS return code {e.args[0] if e.args else '?'} (the "
                 "time span may be too far from 0 for its step sizes, or the tolerances too tight)"
-            ) from None
+            )
 
-    def step_work(self, power: Callable[[float, np.ndarray, np.ndarray], float]) -> float:
+    def step_work(self, power: Power) -> float:
         """∫ P dt over the last internal step (see :func:`pfaff.integrate.work.hermite_work`)."""
         ends = self.endpoints()
         return hermite_work(ends, power, ends[0][0], ends[1][0])
 
-    def work_until(
-        self, power: Callable[[float, np.ndarray, np.ndarray], float], b: float
-    ) -> float:
+    def work_until(self, power: Power, b: float) -> float:
         """∫ P dt from the start of the last internal step to ``b`` inside it (Hermite)."""
         ends = self.endpoints()
         return hermite_work(ends, power, ends[0][0], b)
@@ -220,7 +230,7 @@ class IDAStepper:
         tiny = STALL_ULPS * EPS * max(abs(self.t), STALL_FRACTION * self._span)
         self._tiny_count = self._tiny_count + 1 if self.t - t_before < tiny else 0
         if self._tiny_count >= STALL_STEPS:
-            raise PfaffError(
+            self.fail(
                 f"IDA stalled at t = {self.t:.17g}: {STALL_STEPS} steps in a row shorter than "
                 f"{tiny:.3g}. Its corrector cannot meet the tolerances here: they may "
                 "be too tight for IDA (rtol below about 1e-10), or the constraint Jacobian loses "
@@ -239,5 +249,5 @@ class IDAStepper:
             out.append((r.y[: self.n].copy(), r.y[self.n : 2 * self.n].copy()))
         return out
 
-    def finish(self) -> dict:
+    def finish(self) -> dict[str, int | float | None]:
         return self.stats

@@ -1,7 +1,7 @@
 """ODE-based methods: the acceleration-level equations integrated by SciPy's adaptive Runge–Kutta.
 
-Two separate ideas share one stepping contract (``t``, ``state()``, ``step()``, ``dense(ts)``,
-``stats``):
+Two separate ideas, each a :class:`pfaff.integrate.stepper.Stepper` (the contract of
+:func:`pfaff.simulate`):
 
 - :class:`ProjectedRK` ("projection") integrates q̈ = q̈(q, q̇, t) from the KKT solve and, after
   every accepted step, projects the state back onto f = 0, A q̇ + b = 0 (:mod:`pfaff.numeric.projection`);
@@ -15,13 +15,12 @@ Small fused models run DOP853 on Python floats (:mod:`pfaff.integrate.fastrk`), 
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
-from pfaff.core.errors import OptionError, PfaffError
+from pfaff.core.errors import OptionError
 from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
+from pfaff.integrate.stepper import Power, Stepper, StepperOptions
 from pfaff.integrate.work import checked_sum, dense_work
 from pfaff.numeric.projection import Projector
 from pfaff.numeric.protocol import DynamicsModel, OdeFunction
@@ -29,34 +28,28 @@ from pfaff.numeric.protocol import DynamicsModel, OdeFunction
 RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
 
 
-class _RKStepper:
+class _RKStepper(Stepper):
     """One SciPy Runge–Kutta solver driven step by step."""
 
-    def __init__(
-        self,
-        fun: OdeFunction,
-        t0: float,
-        y0: np.ndarray,
-        t_end: float,
-        opts: dict,
+    def _start(
+        self, fun: OdeFunction, t0: float, y0: np.ndarray, t_end: float, opts: StepperOptions
     ) -> None:
-        name = opts.get("integrator", "DOP853")
+        """The solver on ``fun`` from (t0, y0) (the subclasses' ``__init__`` make ``fun``)."""
+        name = opts.integrator
         if name not in RK_METHODS:
             raise OptionError(
                 f"`integrator` must be one of {', '.join(RK_METHODS)} (explicit Runge–Kutta, "
                 f"which can restart from a projected state); got {name!r}"
             )
-        kw = {k: opts[k] for k in ("max_step", "first_step") if opts.get(k) is not None}
+        kw = opts.step_sizes()
         on_lists = fun.on_lists
         self.solver: OdeSolver
         if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
             self.solver = FloatDOP853(
-                fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], list_fun=on_lists, **kw
+                fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, list_fun=on_lists, **kw
             )
         else:
-            self.solver = RK_METHODS[name](
-                fun, t0, y0, t_end, rtol=opts["rtol"], atol=opts["atol"], **kw
-            )
+            self.solver = RK_METHODS[name](fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, **kw)
         self.fun = fun
         self.n = len(y0) // 2
         self.stats = {"steps": 0, "rejected": 0, "nfev": 0}
@@ -77,7 +70,7 @@ class _RKStepper:
         msg = self.solver.step()
         used = self.solver.nfev - before
         if self.solver.status == "failed":
-            raise PfaffError(f"the integrator failed at t = {self.solver.t:.17g}: {msg}")
+            self.fail(f"the integrator failed at t = {self.solver.t:.17g}: {msg}")
         self.stats["steps"] += 1
         self.stats["rejected"] += max(used // self._attempt_nfev - 1, 0)
         self._dense = self._y_raw = None
@@ -102,7 +95,7 @@ class _RKStepper:
         y1 = self._y_raw if self._y_raw is not None else s.y
         return (float(s.t_old), s.y_old, s.K[0]), (float(s.t), y1, s.K[-1])
 
-    def step_work(self, power: Callable[[float, np.ndarray, np.ndarray], float]) -> float:
+    def step_work(self, power: Power) -> float:
         """∫ P dt over the last step by the Runge–Kutta method's own quadrature, h Σ b_i P(t_i, y_i).
 
         This is what the method would compute for an extra component W' = P(t, y): the same
@@ -119,13 +112,11 @@ class _RKStepper:
                 terms.append(b * power(float(t0 + C[i] * h), y[:n], y[n:]))
         return h * checked_sum(terms, t0 + h)
 
-    def work_until(
-        self, power: Callable[[float, np.ndarray, np.ndarray], float], b: float
-    ) -> float:
+    def work_until(self, power: Power, b: float) -> float:
         """∫ P dt from the start of the last step to ``b`` inside it, on the dense output."""
         return dense_work(self.dense, power, float(self.endpoints()[0][0]), b)
 
-    def finish(self) -> dict:
+    def finish(self) -> dict[str, int | float | None]:
         self.stats["nfev"] = self.solver.nfev + self._restarts
         return self.stats
 
@@ -133,10 +124,22 @@ class _RKStepper:
 class ProjectedRK(_RKStepper):
     """Runge–Kutta on the acceleration-level ODE with projection after every accepted step."""
 
-    def __init__(self, model: DynamicsModel, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
+    name = "projection"
+    projects_steps = True
+
+    def __init__(
+        self,
+        model: DynamicsModel,
+        t0: float,
+        q0: np.ndarray,
+        qd0: np.ndarray,
+        t_end: float,
+        options: StepperOptions,
+        projector: Projector,
+    ) -> None:
         fun = model.ode_function(start=(t0, q0, qd0))
-        super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)
-        self.projector: Projector = opts["projector"]
+        self._start(fun, t0, np.concatenate([q0, qd0]), t_end, options)
+        self.projector = projector
 
     def step(self) -> None:
         super().step()
@@ -154,7 +157,18 @@ class ProjectedRK(_RKStepper):
 class BaumgarteRK(_RKStepper):
     """Runge–Kutta on the Baumgarte-stabilized acceleration-level ODE (no projection)."""
 
-    def __init__(self, model: DynamicsModel, t0: float, q0, qd0, t_end: float, opts: dict) -> None:
-        alpha, beta = opts["alpha"], opts["beta"]
-        fun = model.ode_function(alpha, beta, start=(t0, q0, qd0))
-        super().__init__(fun, t0, np.concatenate([q0, qd0]), t_end, opts)
+    name = "baumgarte"
+    reports_drift = True
+
+    def __init__(
+        self,
+        model: DynamicsModel,
+        t0: float,
+        q0: np.ndarray,
+        qd0: np.ndarray,
+        t_end: float,
+        options: StepperOptions,
+        projector: Projector,
+    ) -> None:
+        fun = model.ode_function(options.alpha, options.beta, start=(t0, q0, qd0))
+        self._start(fun, t0, np.concatenate([q0, qd0]), t_end, options)

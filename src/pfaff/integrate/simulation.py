@@ -7,15 +7,18 @@ into a :class:`pfaff.Trajectory` (q̈, λ, energies and residuals evaluated at e
 
 from __future__ import annotations
 
+import inspect
 import math
 import numbers
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import fields
 
 import numpy as np
 
 from pfaff.core.errors import (
+    ConstraintError,
     OptionError,
     PfaffError,
     SimulationError,
@@ -27,13 +30,16 @@ from pfaff.integrate.events import SINGULAR, AttitudeEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
+from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
 from pfaff.numeric.checks import check_model, check_state
 from pfaff.numeric.projection import Projector
 from pfaff.numeric.protocol import DynamicsModel
 from pfaff.numeric.value import single_threaded
 from pfaff.results.trajectory import Trajectory
 
-METHODS = {"projection": ProjectedRK, "baumgarte": BaumgarteRK, "ida": IDAStepper}
+METHODS: dict[str, type[Stepper]] = {
+    cls.name: cls for cls in (ProjectedRK, BaumgarteRK, IDAStepper)
+}  # the built-in methods by name; simulate(method=...) also takes any Stepper subclass
 
 
 def _real(v: object, key: str) -> float:
@@ -85,10 +91,30 @@ STALL_STEPS = 1e7  # a pace that needs more steps than this to finish is a stall
 MAX_STEPS = 1e9  # a max_step that forces more steps than this is refused (it would not end)
 
 
-def _options(method: str, kw: dict, span: tuple[float, float]) -> dict:
+def _stepper_class(method: object) -> type[Stepper]:
+    """The :class:`Stepper` subclass ``method`` names or is (an :class:`OptionError` otherwise)."""
+    if isinstance(method, str) and method in METHODS:
+        return METHODS[method]
+    if not isinstance(method, type):
+        raise OptionError(
+            f"unknown method {method!r:.80}; `method` must be one of {', '.join(METHODS)} or a "
+            "subclass of pfaff.Stepper"
+        )
+    if not issubclass(method, Stepper):
+        raise OptionError(
+            f"`method` must be one of {', '.join(METHODS)} or a subclass of pfaff.Stepper; got "
+            f"the class {method.__qualname__:.80}, which is not one"
+        )
+    if inspect.isabstract(method):
+        missing = ", ".join(sorted(method.__abstractmethods__))
+        raise OptionError(
+            f"`method` {method.__qualname__:.80} is abstract: it does not implement {missing}"
+        )
+    return method
+
+
+def _options(kw: dict, span: tuple[float, float]) -> dict:
     """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
-    if not isinstance(method, str) or method not in METHODS:
-        raise OptionError(f"unknown method {method!r:.80}; choose one of {', '.join(METHODS)}")
     for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol"):
         v = _real(kw[key], key)
         if not (math.isfinite(v) and v >= 0):
@@ -187,7 +213,7 @@ def simulate(
     qd0: Sequence[float] | np.ndarray,
     t_span: tuple[float, float],
     *,
-    method: str = "projection",
+    method: str | type[Stepper] = "projection",
     rtol: float = 1e-9,
     atol: float = 1e-11,
     t_eval: Sequence[float] | np.ndarray | None = None,
@@ -215,13 +241,13 @@ def simulate(
         Initial coordinates and speeds (checked against the constraints).
     t_span : (float, float)
         Start and end time, end > start.
-    method : {"projection", "baumgarte", "ida"}
+    method : {"projection", "baumgarte", "ida"} or Stepper subclass
         "projection" (default): adaptive Runge–Kutta on the acceleration-level equations, the state
         projected mass-orthogonally onto f = 0 and A q̇ + b = 0 after every step; passes
         configurations where A loses rank (see :mod:`pfaff.numeric.kkt`). "baumgarte": the stabilized
         field A q̈ + Ȧq̇ + ḃ = −2α(A q̇ + b) − β² f, no projection (through such configurations
         only with α, β fast against the motion). "ida": SUNDIALS IDA on the index-2 GGL
-        formulation.
+        formulation. A :class:`pfaff.Stepper` subclass (the class): a method of one's own.
     rtol, atol : float
         Integrator tolerances.
     t_eval : array_like, shape (k,), optional
@@ -240,7 +266,8 @@ def simulate(
     project_initial : bool
         Project an inconsistent initial state instead of raising.
     project_output : bool, optional
-        Project reported states (default: yes, except for "baumgarte", whose drift is reported).
+        Project reported states (default: yes, except for "baumgarte", whose drift is reported:
+        a stepper's ``reports_drift``).
     ida_jacobian : {"fd", "approximate"}, optional
         IDA's Newton matrix: finite differences (default up to 80 unknowns) or assembled from M
         and A without curvature terms (default beyond).
@@ -260,6 +287,9 @@ def simulate(
 
     Raises
     ------
+    SimulationError
+        With ``throw=True``, when the run fails; without it, when the method fails before its
+        first step.
     ModelTypeError
         ``model`` is not a compiled model (e.g. equations not yet ``.compile(parameters)``-d).
     OptionError
@@ -301,8 +331,8 @@ def _simulate(
         model = DrivenModel(model, inputs)
     t0, t1 = _span(t_span)
     te = _t_eval(t_eval, t0, t1)
+    cls = _stepper_class(method)
     opts = _options(
-        method,
         dict(
             rtol=rtol,
             atol=atol,
@@ -322,33 +352,37 @@ def _simulate(
         (t0, t1),
     )
     projector = Projector(model, tol=opts["constraint_tol"])
+    options = StepperOptions(**{f.name: opts[f.name] for f in fields(StepperOptions)})
     try:
         q0a, qd0a = initial_state(model, t0, q0, qd0, projector, opts)
-        opts["projector"] = projector
-        stepper = METHODS[method](model, t0, q0a, qd0a, t1, opts)
+        stepper = cls(model, t0, q0a, qd0a, t1, options, projector)
+    except _RunFailure as e:  # the method could not start
+        raise SimulationError(str(e)) from None
     except (ValueError, ArithmeticError) as e:  # the user's equations, not defined at t0
         if isinstance(e, PfaffError) or not raised_in_generated_code(e):
             raise
         raise undefined_at(e, t0) from None
     if project_output is None:
-        project_output = method != "baumgarte"
+        project_output = not cls.reports_drift
     power = model.power_function() if model.applied_power else None
-    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
+run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     run.events = AttitudeEvents(getattr(model, "attitudes", ()))
-    run.restart = lambda t, q, qd: METHODS[method](model, t, q, qd, t1, opts)
+    run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
         raise SimulationError(message)
     stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
-    return _trajectory(model, method, run, status, message, stats, projector, project_output)
+    return _trajectory(model, cls.name, run, status, message, stats, projector, project_output)
 
 
 class _Run:
     """The stepping loop: records states, drives the progress bar, catches Ctrl-C and failures."""
 
-    def __init__(self, stepper, projector, te, t0: float, t1: float, progress, power=None) -> None:
+    def __init__(
+        self, stepper: Stepper, projector, te, t0: float, t1: float, progress, power=None
+    ) -> None:
         self.stepper, self.projector, self.te = stepper, projector, te
-        self.project_steps = not isinstance(stepper, ProjectedRK)  # its steps end projected
+        self.project_steps = not stepper.projects_steps
         self.t0, self.t1 = t0, t1
         self.progress = sys.stderr.isatty() if progress is None else bool(progress)
         self.power = power  # P(t, q, q̇) of the applied forces, or None when they do no work
@@ -372,7 +406,7 @@ class _Run:
         pace = (after - self._window_t) / self._count
         self._count, self._window_t = 0, after
         if pace <= 0 or (self.t1 - after) / pace > STALL_STEPS:
-            raise PfaffError(
+            raise _RunFailure(
                 f"the integration stalled at t = {after:.17g}: the last {STALL_WINDOW} steps "
                 f"averaged {pace:.3g}, which would take more than {STALL_STEPS:.0e} steps to "
                 "reach the end. The equations may be discontinuous there (sign() or abs() of a "
@@ -391,7 +425,7 @@ class _Run:
             stats["restarts"] = len(self._done)
         return stats
 
-    def _event(self, st) -> tuple[np.ndarray, np.ndarray] | None:
+    def _event(self, st: Stepper) -> tuple[np.ndarray, np.ndarray] | None:
         """After an accepted step: stop at an Euler singularity; switch MRPs (and restart)."""
         q, qd = st.state()
         message = self.events.singular(q, before=self._last_q)
@@ -450,43 +484,43 @@ class _Run:
             events = bool(self.events)
             while st.t < self.t1:
                 t_prev = st.t
-                st.step()
-                self._count += 1
-                if self._count >= STALL_WINDOW:
-                    self._stall(st.t)
-                if te is None:
-                    step_work = self._work()
-                    done = st
-                    switched = self._event(st) if events else None
-                    state = done.state() if switched is None else switched
-                    self._record(done.t, *state, self.project_steps, work + step_work)
-                else:
-                    j = int(np.searchsorted(te, st.t, side="right"))
-                    if j > k:
-                        for ti, (q, qd) in zip(te[k:j], st.dense(te[k:j]), strict=True):
-                            self._record(float(ti), q, qd, True, work + self._work(float(ti)))
-                        k = j
-                    step_work = self._work()
-                    if events:
-                        self._event(st)
+                try:
+                    st.step()
+                    self._count += 1
+                    if self._count >= STALL_WINDOW:
+                        self._stall(st.t)
+                    if te is None:
+                        step_work = self._work()
+                        done = st
+                        switched = self._event(st) if events else None
+                        state = done.state() if switched is None else switched
+                        self._record(done.t, *state, self.project_steps, work + step_work)
+                    else:
+                        j = int(np.searchsorted(te, st.t, side="right"))
+                        if j > k:
+                            for ti, (q, qd) in zip(te[k:j], st.dense(te[k:j]), strict=True):
+                                self._record(float(ti), q, qd, True, work + self._work(float(ti)))
+                            k = j
+                        step_work = self._work()
+                        if events:
+                            self._event(st)
+                except Exception as e:
+                    failure = _failure(e, st.t)
+                    if failure is e:
+                        raise
+                    raise failure from e
                 work += step_work
                 st = self.stepper
                 if bar is not None:
                     bar.update(st.t - t_prev)
         except KeyboardInterrupt:
             status, message = "interrupted", f"interrupted by the user at t = {st.t:.17g}"
-        except _Singular as e:
-            status, message = "failed", f"stopped at t = {st.t:.17g}: {e}"
-        except (PfaffError, FloatingPointError, np.linalg.LinAlgError) as e:
-            status, message = "failed", f"failed at t = {st.t:.17g}: {e}"
-            near = self.events.singular(st.state()[0], 10 * SINGULAR) if self.events else None
+        except _RunFailure as e:
+            status, message = "failed", f"{e.verb} at t = {st.t:.17g}: {e}"
+            hint = e.hint and self.events
+            near = self.events.singular(st.state()[0], 10 * SINGULAR) if hint else None
             if near is not None:  # the integrator gave up just before the check would stop it
                 message += f" ({near})"
-        except (ValueError, ArithmeticError) as e:
-            if not raised_in_generated_code(e):  # a bug in pfaff: surface it as one
-                raise
-            # a math domain error, overflow or division by zero in the user's equations
-            status, message = "failed", f"failed at t = {st.t:.17g}: {undefined_at(e, st.t)}"
         finally:
             self.cpu = time.process_time() - start
             if bar is not None:
@@ -494,8 +528,36 @@ class _Run:
         return status, message
 
 
-class _Singular(Exception):
+class _Singular(_RunFailure):
     """An attitude set reached its singularity: the run stops (status "failed")."""
+
+    verb = "stopped"
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message, hint=False)
+
+
+# the numerical failures of the equations at a state reached by a run: non-finite values
+# (StateError, FloatingPointError), no acceleration satisfying the constraints (ConstraintError,
+# a singular KKT system); a ValueError or ArithmeticError only when raised in generated code
+NUMERICAL_FAILURES = (StateError, ConstraintError, FloatingPointError, np.linalg.LinAlgError)
+
+
+def _failure(e: Exception, t: float) -> Exception:
+    """What an exception raised while stepping at time ``t`` becomes: a :class:`_RunFailure`
+    for a failure of the run (the stepper's own, or a numerical one of the equations), ``e``
+    itself for anything else (a bug, a bad option found late: raised out of ``simulate``)."""
+    if isinstance(e, _RunFailure):
+        return e
+    if isinstance(e, NUMERICAL_FAILURES):
+        return _RunFailure(str(e))
+    if (
+        isinstance(e, ValueError | ArithmeticError)
+        and not isinstance(e, PfaffError)
+        and raised_in_generated_code(e)
+    ):  # a math domain error, overflow or division by zero in the user's equations
+        return _RunFailure(str(undefined_at(e, t)), hint=False)
+    return e
 
 
 def _stacked(rows: list, n: int) -> np.ndarray:
