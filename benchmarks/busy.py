@@ -42,6 +42,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import statistics
 import subprocess
 import sys
@@ -192,8 +193,10 @@ def run_variant(row: str, variant: str, args: argparse.Namespace) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def start_load(n: int) -> list[subprocess.Popen]:
-    return [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(n)]
+def start_load(n: int, procs: list[subprocess.Popen]) -> None:
+    """Start ``n`` busy loops, appended to ``procs`` one by one (so a failure leaks none)."""
+    for _ in range(n):
+        procs.append(subprocess.Popen([sys.executable, "-c", "while 1: pass"]))
 
 
 def stop_load(procs: list[subprocess.Popen]) -> None:
@@ -282,12 +285,19 @@ def main() -> None:
         print(json.dumps(measure(row, variant, args.calls, args.repeat)))
         return
     load = 0 if args.no_load else args.load
-    procs = start_load(load)
+    before = os.getloadavg()[0]
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # so that `finally` runs
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # even if started with it ignored
+    procs: list[subprocess.Popen] = []
     try:
+        start_load(load, procs)
         results = {row: measure_row(row, args) for row in args.rows}
+        after = os.getloadavg()[0]
     finally:
         stop_load(procs)
-    if not print_table(results, args, load):
+    ok = print_table(results, args, load)
+    print(f"1-minute load average: {before:.2f} before the load, {after:.2f} at the end")
+    if not ok:
         sys.exit(1)
 
 
