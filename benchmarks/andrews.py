@@ -9,6 +9,9 @@ rest, every method integrates to t = 0.03 s (the crank turns about 2.5 times, an
 Solvers (problem ``andrews``, PSIDE at rtol = atol = 1e-14),
 :func:`pfaff.models.andrews.andrews_reference`.
 
+A run that stops early (IDA at rtol = 1e-12 does, near t = 0.0104) is listed with its status and
+message; the exit status is 1 only when a ``projection`` run fails.
+
 Rows: each method (``projection``, ``baumgarte``, ``ida``) at each ``--rtol`` (atol = rtol / 100).
 Printed per row: wall and CPU seconds of the ``simulate`` call (the model compiled before, its
 machine code made by a short warm-up run; the compile time is printed apart), steps and
@@ -127,7 +130,9 @@ def main() -> None:
     pfaff.simulate(model, q0, qd0, (0.0, 1e-4), progress=False)  # warm-up: machine code
     rows = [run(model, m, rtol) for rtol in args.rtol for m in args.methods]
     print_table(rows, compile_cpu)
-    if any(r["status"] != "success" for r in rows):
+    # IDA stopping at a tight rtol is a finding reported in the table; the projection method
+    # (pfaff's default) must always reach t = 0.03.
+    if any(r["status"] != "success" for r in rows if r["method"] == "projection"):
         sys.exit(1)
 
 
