@@ -365,7 +365,7 @@ def _simulate(
     if project_output is None:
         project_output = not cls.reports_drift
     power = model.power_function() if model.applied_power else None
-run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
+    run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     run.events = AttitudeEvents(getattr(model, "attitudes", ()))
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
     status, message = run.go(q0a, qd0a)

@@ -267,6 +267,7 @@ def n_link_pendulum_on_cart(n: int) -> System:
     return s
 
 
+from pfaff.models.andrews import ANDREWS, andrews_squeezer  # noqa: E402, F401  (Andrews' squeezer)
 from pfaff.models.bicycle import (  # noqa: E402, F401  (the Whipple bicycle)
     MEIJAARD,
     bicycle_operating_point,
