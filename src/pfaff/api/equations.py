@@ -6,7 +6,6 @@ from pfaff.core.errors import ModelError, OptionError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.equations import Derivation, Solution
-from pfaff.derive.linearize import ModelLinearizer
 from pfaff.derive.linearize import linearize as _linearize
 from pfaff.numeric.linearization import Linearization
 from pfaff.numeric.model import SOLVERS as GENERAL_SOLVERS
@@ -101,9 +100,7 @@ class EquationsOfMotion(Derivation):
             )
         if self.family:
             return compile_structured(self, parameters or {}, solver=solver)
-        model = compile_equations(self, parameters or {}, solver=solver)
-        model.linearizer = ModelLinearizer(self, model.parameters)  # NumericModel.linearize
-        return model
+        return compile_equations(self, parameters or {}, solver=solver)
 
     def linearize(
         self,

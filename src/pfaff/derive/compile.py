@@ -25,6 +25,7 @@ from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
 from pfaff.derive.geometry import build_geometry
+from pfaff.derive.linearize import linearizer_for
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.model import NumericModel
 from pfaff.numeric.streams import Index, StreamCode, StreamKernel
@@ -302,6 +303,7 @@ def compile_equations(
         parameters = {**{i: 0.0 for i in inputs if i in used and i not in given}, **parameters}
     model = build_model(eom, model_parameter_values(eom, parameters), solver=solver)
     model.inputs = inputs
+    model.linearizer = linearizer_for(eom)  # NumericModel.linearize (move to build_model)
     model.timings["compile"] = time.process_time() - start
     if "equations" in getattr(eom, "timings", {}):
         model.timings["equations"] = eom.timings["equations"]

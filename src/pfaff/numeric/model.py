@@ -500,13 +500,18 @@ class NumericModel(StreamModel):
         independent: object,
         independent_speeds: object = None,
         inputs: object = (),
+        *,
+        input_values: Mapping[str, object] | None = None,
     ) -> Linearization:
         """Linearize about the state (q, q̇) at time t: ẋ = A x + B u (numeric).
 
         The same as :meth:`pfaff.EquationsOfMotion.linearize` with this model's parameter
-        values, with exact derivatives (differentiated symbolically once, then evaluated); the
-        coordinates of ``independent`` and ``independent_speeds`` and the ``inputs`` (parameters)
-        may be given by name. See :func:`pfaff.numeric.linearization.linearize_model`.
+        values, with exact derivatives (differentiated and generated into code once, on the
+        first call; then numeric work only); the coordinates of ``independent`` and
+        ``independent_speeds`` and the ``inputs`` (parameters) may be given by name.
+        ``input_values`` (input name -> value) sets inputs declared with ``System.add_input``
+        for this call only; one left out keeps the model's value (0 unless compiled with one).
+        See :func:`pfaff.numeric.linearization.linearize_model`.
 
         Examples
         --------
@@ -516,7 +521,9 @@ class NumericModel(StreamModel):
         array([[ 0.  ,  1.  ],
                [-9.81,  0.  ]])
         """
-        return linearize_model(self, t, q, qd, independent, independent_speeds, inputs)
+        return linearize_model(
+            self, t, q, qd, independent, independent_speeds, inputs, input_values
+        )
 
     def accelerations(self, t: float, q: object, qd: object) -> tuple[np.ndarray, np.ndarray]:
         """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
