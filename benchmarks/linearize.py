@@ -5,7 +5,9 @@ The benchmark bicycle of Meijaard et al. (2007) about upright straight running a
 
 * pfaff, symbolic path: ``eom.linearize(op_point, independent, independent_speeds)``, cold (its
   derivatives made on the first call) and warm (a second speed);
-* pfaff, numeric path: ``model.linearize(t, q, q̇, ...)`` of the compiled model;
+* pfaff, numeric path: ``model.linearize(t, q, q̇, ...)`` of the compiled model: the first call
+  (derivatives generated into code) and the median wall time of later calls, against the median
+  of ``model.accelerations`` at the same state (the baseline);
 * SymPy: ``KanesMethod.linearize(A_and_B=True)`` of the same bicycle built with ``KanesMethod``
   (``benchmarks/bicycle.py``, Cramer's rule for the dependent speeds), then evaluated at the same
   point with the parameter values.
@@ -58,6 +60,16 @@ def kane_A(speed: float) -> tuple[np.ndarray, float, float]:
     return A, build, time.process_time() - t0
 
 
+def _median_ms(fn, calls: int = 200) -> float:
+    """Median wall time of ``fn()`` in ms over ``calls`` calls."""
+    times = []
+    for _ in range(calls):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(times))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speed", type=float, default=5.0)
@@ -73,14 +85,19 @@ def main() -> None:
     model, t_compile = _cpu(lambda: eom.compile(MEIJAARD))
     q, qd = bicycle_state(MEIJAARD, speed=v)
     names = [str(c.func) for c in ind]
-    lin_n, t_num = _cpu(lambda: model.linearize(0.0, q, qd, names, [str(c.func) for c in spd]))
+    speeds = [str(c.func) for c in spd]
+    lin_n, t_num = _cpu(lambda: model.linearize(0.0, q, qd, names, speeds))
+    ms_lin = _median_ms(lambda: model.linearize(0.0, q, qd, names, speeds))
+    ms_acc = _median_ms(lambda: model.accelerations(0.0, q, qd))
     ref = meijaard_eigenvalues(v)
     print(f"Whipple bicycle at v = {v:g} m/s: 10 states (7 coordinates, 3 rates), CPU s")
     print(f"  pfaff equations()                         {t_eom:8.3f}")
     print(f"  pfaff eom.linearize, first (derivatives)  {t_cold:8.3f}")
     print(f"  pfaff eom.linearize, next speed           {t_warm:8.3f}")
     print(f"  pfaff compile()                           {t_compile:8.3f}")
-    print(f"  pfaff model.linearize                     {t_num:8.3f}")
+    print(f"  pfaff model.linearize, first (codegen)    {t_num:8.3f}")
+    print(f"  pfaff model.linearize, next calls (ms)    {ms_lin:8.3f}  (median wall time)")
+    print(f"  pfaff model.accelerations, baseline (ms)  {ms_acc:8.3f}  (median wall time)")
     d_sn = np.abs(lin_s.A - lin_n.A).max()
     print(f"  max |A_symbolic - A_numeric|              {d_sn:8.1e}")
     err = np.abs(lean_steer_eigenvalues(lin_s) - ref).max()

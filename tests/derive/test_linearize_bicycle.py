@@ -125,3 +125,17 @@ def test_dependent_rates_are_computed(bicycle) -> None:
     point[bike.coordinates[4].diff()] = -5.0 / values["rR"]
     lin = eom.linearize(point, bike.independent, bike.independent_speeds)
     np.testing.assert_allclose(lean_steer_eigenvalues(lin), TABLE2[5], atol=1e-10)
+
+
+def test_compiled_model_linearize(bicycle) -> None:
+    """NumericModel.linearize: the symbolic path's matrices and Table 2, by generated code."""
+    from pfaff.models.bicycle import MEIJAARD, bicycle_state
+
+    bike, eom, _, _ = bicycle
+    model = eom.compile(MEIJAARD)
+    ind = [str(c.func) for c in bike.independent]
+    spd = [str(c.func) for c in bike.independent_speeds]
+    for v in (2.0, 5.0, 8.0):
+        lin = model.linearize(0.0, *bicycle_state(MEIJAARD, speed=v), ind, spd)
+        np.testing.assert_allclose(lin.A, _lin(bicycle, v).A, rtol=1e-11, atol=1e-11)
+        assert np.abs(lean_steer_eigenvalues(lin) - np.array(TABLE2[int(v)])).max() < 1e-10

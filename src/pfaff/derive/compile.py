@@ -25,7 +25,7 @@ from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.fused import build_fused
 from pfaff.derive.geometry import build_geometry
-from pfaff.derive.linearize import ModelLinearizer
+from pfaff.derive.linearize import linearizer_for
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.model import DENSE_LIMIT, NumericModel
 from pfaff.numeric.parts import ConStreams, DynStreams
@@ -269,9 +269,7 @@ def build_model(
         inputs=inputs,
         attitudes=attitude_sets(eom),
         geometry=None if constraints_only else build_geometry(eom, values),  # animations
-        linearizer=None
-        if constraints_only
-        else ModelLinearizer(eom, {p.name: v for p, v in zip(params, values, strict=True)}),
+        linearizer=None if constraints_only else linearizer_for(eom),  # NumericModel.linearize
         restream=Restream(eom, params, constraints_only),  # for model.with_parameters
         timings=timings,
     )

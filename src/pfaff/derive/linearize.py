@@ -6,14 +6,14 @@ differentiates them exactly by q, q̇ and the inputs (in SymEngine when the roun
 :mod:`pfaff.derive.engine`; else in SymPy). :func:`linearize` checks an operating point given as a
 dict (consistent with every constraint, accelerations of the kept rates zero) and hands the
 matrices at it to :func:`pfaff.numeric.linearization.reduce_linear`: as floats when every value is
-a number, as SymPy matrices otherwise. :meth:`LinearForms.numeric_function` makes the same
-matrices a function of (t, q, q̇, q̈, λ, u, parameters) for :meth:`pfaff.NumericModel.linearize`.
+a number, as SymPy matrices otherwise. :class:`CompiledLinearizer` (:func:`linearizer_for`) generates the same
+matrices once into code of (t, q, q̇, q̈, λ, parameters) for :meth:`pfaff.NumericModel.linearize`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -26,17 +26,16 @@ from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError, State
 from pfaff.core.symbols import as_expr, is_coordinate_like, speed, t
 from pfaff.numeric.linearization import (
     NUMPY,
+    TOL,
     Linearization,
     OperatingMatrices,
+    check_steady,
     complement,
-    ignorable,
     reduce_linear,
 )
 
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
-
-TOL = 1e-8  # residuals (constraints, accelerations) above this times their scale are refused
 
 
 class SympyOps:
@@ -210,6 +209,10 @@ class LinearForms:
         self.G = [sum((A[k][j] * qdd[j] for j in range(n)), bias[k]) for k in range(m)]
         self.V = [sum((A[k][j] * qd[j] for j in range(n)), b[k]) for k in range(m)]
         self.f = [f[k] for k in self.hol]
+
+    def __getstate__(self) -> dict:
+        """The forms without what is made from them (derivatives, numeric functions)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("jacobians", "_fns")}
 
     def _sym(self, s: sp.Symbol) -> Any:
         return symengine.Symbol(s.name) if self.alg is not None else s
@@ -595,55 +598,178 @@ def linearize_at(
     mats = OperatingMatrices(M, A, list(ev.forms.hol), **jac)
     Amat, B, C, D = reduce_linear(mats, ind, spd, names, ops)
     if ev.numeric:
-        _check_steady(Amat, ind, qd0, names)
+        check_steady(Amat, ind, qd0, names)
     states = [eom.coordinates[i] for i in ind] + [speed(eom.coordinates[i]) for i in spd]
     lam = np.array(lam0, dtype=float) if ev.numeric else sp.ImmutableMatrix(lam0)
     return Linearization(Amat, B, states, ins, (C, D), lam)
 
 
-def _check_steady(A: np.ndarray, ind: list[int], qd0: list, names: list[str]) -> None:
-    """A kept coordinate that moves must be one the linearized equations ignore."""
-    free = set(ignorable(A))
-    scale = TOL * (1.0 + _max_abs(qd0))
-    bad = [
-        f"`{names[j]}` (rate {qd0[j]:.6g})"
-        for k, j in enumerate(ind)
-        if abs(qd0[j]) > scale and k not in free
-    ]
-    if bad:
-        raise StateError(
-            "the operating point is not a steady motion: the kept coordinates "
-            + ", ".join(bad)
-            + " change while the linearized equations depend on them"
-        )
+class _Kernel:
+    """:class:`pfaff.numeric.linearization.LinearizationKernel` of a :class:`CompiledLinearizer`:
+    its generated functions for these inputs (shared with the factory's other kernels)."""
+
+    def __init__(self, factory: CompiledLinearizer, inputs: tuple[int, ...]) -> None:
+        self._factory, self._inputs = factory, inputs
+        forms = factory.forms
+        self._values = factory.function("values")
+        self._state = factory.function("state")
+        self._input = factory.function(inputs) if inputs else None
+        shapes = forms._shapes()
+        n, m, r = forms.n, forms.m, len(inputs)
+        shapes.update({"E_u": (n, r), "G_u": (m, r), "V_u": (m, r)})
+        self._layout = {
+            which: [(k, shapes[k]) for k in keys]
+            for which, keys in (("values", VALUES), ("state", STATE), ("input", INPUT))
+        }
+
+    @staticmethod
+    def _unflatten(layout: list, flat: np.ndarray) -> dict[str, np.ndarray]:
+        out, k = {}, 0
+        for name, (r, c) in layout:
+            out[name] = flat[k : k + r * c].reshape(r, c)
+            k += r * c
+        return out
+
+    def values(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        return self._unflatten(self._layout["values"], self._values(x))
+
+    def jacobians(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        out = self._unflatten(self._layout["state"], self._state(x))
+        if self._input is not None:
+            out |= self._unflatten(self._layout["input"], self._input(x))
+        else:
+            out |= self._unflatten(self._layout["input"], np.zeros(0))
+        return out
 
 
-class ModelLinearizer:
-    """The linearization a compiled model hands to: its derivation and parameter values.
+VALUES = ("M", "A", "E", "G", "V", "f")
+STATE = ("E_q", "E_qd", "G_q", "G_qd", "V_q")
+INPUT = ("E_u", "G_u", "V_u")
 
-    :meth:`pfaff.NumericModel.linearize` calls it with numbers; the derivatives are the exact
-    ones of :class:`LinearForms` (made on the first call, shared with the derivation's own
-    :meth:`pfaff.EquationsOfMotion.linearize`), evaluated with these values.
+
+class CompiledLinearizer:
+    """The :class:`pfaff.numeric.linearization.LinearizerFactory` of a derivation: what
+    :meth:`pfaff.NumericModel.linearize` evaluates.
+
+    On the first request the equations' :class:`LinearForms` (no inputs: every parameter is an
+    argument) are differentiated by q and q̇ once, and by the parameters asked for as inputs once
+    per such set, and generated into functions of x = (t, q, q̇, q̈, λ, p) (SymEngine's
+    ``Lambdify``: machine code through LLVM where this SymEngine has it, with common
+    subexpressions shared); later calls are numeric only, for any parameter values (models
+    made by ``with_parameters`` share the factory) and input values.
+
+    Pickling keeps the forms (SymEngine or SymPy expressions) and drops the derivation, the
+    derivatives and the generated functions: they are made again on first use after unpickling.
+
+    Parameters
+    ----------
+    eom : Derivation
+
+    Attributes
+    ----------
+    coordinates, speeds : tuple, length n
+        The coordinates q(t) and their rates q̇(t) (:attr:`Linearization.states`).
+    parameters : tuple of Symbol
+        The derivation's parameters, in the compiled model's order.
+    holonomic_rows : list of int
+        The constraint rows with a holonomic f.
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> eom = pfaff.models.pendulum().equations()
+    >>> factory = linearizer_for(eom)
+    >>> [p.name for p in factory.parameters]
+    ['L', 'g', 'm']
+    >>> x = np.array([0.0, 0.0, 0.0, 0.0, 2.0, 9.81, 1.0])  # t, q, q̇, q̈, (no λ), L, g, m
+    >>> factory.kernel(()).jacobians(x)["E_q"]  # ∂(m L² θ̈ + m g L sin θ)/∂θ = m g L
+    array([[19.62]])
     """
 
-    def __init__(self, eom: Derivation, values: dict[str, float]) -> None:
-        self.eom = eom
-        self.values = dict(values)
+    def __init__(self, eom: Derivation) -> None:
+        self._eom: Derivation | None = eom
+        self.coordinates = tuple(eom.coordinates)
+        self.speeds = tuple(speed(c) for c in eom.coordinates)
+        self.parameters = tuple(eom.parameters)
+        self.holonomic_rows = [i for i, f in enumerate(eom.holonomic_constraints) if f is not None]
+        self._forms: LinearForms | None = None
+        self._fns: dict = {}
+        self._kernels: dict[tuple[int, ...], _Kernel] = {}
 
-    def __call__(
-        self,
-        t0: float,
-        q: np.ndarray,
-        qd: np.ndarray,
-        independent: object,
-        independent_speeds: object = None,
-        inputs: object = (),
-        values: dict[str, float] | None = None,
-    ) -> Linearization:
-        """The linearization at (t0, q, q̇) with the parameter ``values`` (default: those
-        the model was compiled with; a model made by ``with_parameters`` passes its own)."""
-        coords = self.eom.coordinates
-        op: dict = {t: float(t0), **(self.values if values is None else values)}
-        op.update({c: float(v) for c, v in zip(coords, q, strict=True)})
-        op.update({speed(c): float(v) for c, v in zip(coords, qd, strict=True)})
-        return linearize(self.eom, op, independent, independent_speeds, inputs)
+    @property
+    def forms(self) -> LinearForms:
+        """The :class:`LinearForms` without inputs (shared with the derivation's own)."""
+        if self._forms is None:
+            assert self._eom is not None
+            self._forms = linear_forms(self._eom, ())
+        return self._forms
+
+    def kernel(self, inputs: tuple[int, ...]) -> _Kernel:
+        """The kernel whose ``*_u`` Jacobians are by the parameters of indices ``inputs``."""
+        k = self._kernels.get(inputs)
+        if k is None:
+            k = self._kernels[inputs] = _Kernel(self, inputs)
+        return k
+
+    def function(self, which: str | tuple[int, ...]) -> Callable[[np.ndarray], np.ndarray]:
+        """The generated function of ``"values"``, ``"state"`` (the Jacobians by q and q̇) or
+        a tuple of parameter indices (the Jacobians by them), made once."""
+        fn = self._fns.get(which)
+        if fn is None:
+            fn = self._fns[which] = _generate(self.forms, self._exprs(which))
+        return fn
+
+    def _exprs(self, which: str | tuple[int, ...]) -> list:
+        f = self.forms
+        if which == "values":
+            lists = f._lists("values")
+            return [e for k in VALUES for row in lists[k] for e in row]
+        if which == "state":
+            jac = f.jacobians
+            return [e for k in STATE for row in jac[k] for e in row]
+        params = [f.params[i] for i in which]
+        jac = [f._jac(exprs, params) for exprs in (f.E, f.G, f.V)]
+        return [e for rows in jac for row in rows for e in row]
+
+    def __getstate__(self) -> dict:
+        forms = self.forms
+        return {
+            **self.__dict__,
+            "_eom": None,
+            "_forms": forms,
+            "_fns": {},
+            "_kernels": {},
+        }
+
+
+def _generate(forms: LinearForms, exprs: list) -> Callable[[np.ndarray], np.ndarray]:
+    """``exprs`` as a function of the flat argument array of ``forms.args`` returning a flat
+    array: SymEngine's ``Lambdify`` (LLVM where available, without optimization passes: they
+    cost more than they gain once), or SymPy's ``lambdify`` for forms SymEngine cannot take."""
+    if not exprs:
+        return _empty
+    if forms.alg is not None:
+        try:
+            return symengine.Lambdify(
+                forms.args, exprs, cse=True, real=True, backend="llvm", opt_level=0
+            )
+        except (ValueError, RuntimeError, TypeError):  # no LLVM in this SymEngine
+            return symengine.Lambdify(forms.args, exprs, cse=True, real=True)
+    fn = sp.lambdify(forms.args, exprs, modules="numpy", cse=True, docstring_limit=0)
+    return lambda x: np.asarray(fn(*x), dtype=float)
+
+
+def _empty(x: np.ndarray) -> np.ndarray:
+    return np.zeros(0)
+
+
+def linearizer_for(eom: Derivation) -> CompiledLinearizer:
+    """The linearizer factory a compiled model of ``eom`` holds (nothing is derived yet).
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> linearizer_for(pfaff.models.pendulum().equations()).holonomic_rows
+    []
+    """
+    return CompiledLinearizer(eom)

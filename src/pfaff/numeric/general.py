@@ -204,8 +204,6 @@ class GeneralParts:
         d["_solver"], d["_lu"] = general_solver(d["solver"], d["n"], d["m"])
 
     def _rebuilt(self, parameters: dict[str, float]) -> NumericModel:
-        from pfaff.numeric.model import NumericModel
-
         model: NumericModel = self  # type: ignore[assignment]
         dyn, con = model.dyn, model.con
         old, new = list(model.parameters.values()), list(parameters.values())
@@ -214,7 +212,7 @@ class GeneralParts:
         geometry = model.geometry
         if geometry is not None and new != old:
             geometry = geometry.with_parameters(parameters)  # type: ignore[attr-defined]
-        return NumericModel(
+        return type(model)(
             model.n, model.m, dyn, con, coordinate_names=model.coordinate_names,
             multiplier_names=model.multiplier_names, constraint_names=model.constraint_names,
             holonomic=model.holonomic, parameters=parameters, solver=model.solver,

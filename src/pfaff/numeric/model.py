@@ -13,6 +13,7 @@ model's evaluator (:mod:`pfaff.numeric.evaluator`), fixed when it is built.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -34,6 +35,7 @@ from pfaff.numeric.fused import FusedLinearization
 from pfaff.numeric.general import DENSE_LIMIT, GeneralParts, augmentation, fused_states
 from pfaff.numeric.inertia import inertia_test, undetermined_message
 from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, KKTSystem, SingularKKT, SparseSolver, row_scales
+from pfaff.numeric.linearization import linearize_model
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization
@@ -371,16 +373,17 @@ class NumericModel(GeneralParts, StreamModel):
         independent_speeds: object = None,
         inputs: object = (),
         *,
-        input_values: dict | None = None,
+        input_values: Mapping[str, object] | None = None,
     ) -> Linearization:
         """Linearize about the state (q, q̇) at time t: ẋ = A x + B u (numeric).
 
         The same as :meth:`pfaff.EquationsOfMotion.linearize` with this model's parameter
-        values, with exact derivatives (differentiated symbolically once, then evaluated); the
-        coordinates of ``independent`` and ``independent_speeds`` and the ``inputs`` (parameters)
-        may be given by name; ``input_values`` gives the declared inputs' values at the
-        operating point (a missing input is 0). See
-        :func:`pfaff.numeric.linearization.linearize_model`.
+        values, with exact derivatives (differentiated and generated into code once, on the
+        first call; then numeric work only); the coordinates of ``independent`` and
+        ``independent_speeds`` and the ``inputs`` (parameters) may be given by name.
+        ``input_values`` (input name -> value) sets inputs declared with ``System.add_input``
+        for this call only (one left out is 0); nothing is written into the model.
+        See :func:`pfaff.numeric.linearization.linearize_model`.
 
         Examples
         --------
@@ -390,10 +393,9 @@ class NumericModel(GeneralParts, StreamModel):
         array([[ 0.  ,  1.  ],
                [-9.81,  0.  ]])
         """
-        from pfaff.numeric.linearization import linearize_model
-
-        at = self._with_inputs(input_values)
-        return linearize_model(at, t, q, qd, independent, independent_speeds, inputs)
+        return linearize_model(
+            self, t, q, qd, independent, independent_speeds, inputs, input_values
+        )
 
     def accelerations(
         self, t: float, q: object, qd: object, *, inputs: dict | None = None
