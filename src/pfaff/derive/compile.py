@@ -249,7 +249,11 @@ def build_model(
         timings["codegen"] = time.process_time() - start
         timings["cache"] = status
         if fused is None:
-            missing = "the system is too large for it or uses a function its printer lacks"
+            missing = (
+                f"its generation {status}"
+                if status.startswith("failed")
+                else "the system is too large for it or uses a function its printer lacks"
+            )
     elif evaluator == "template":
         missing = ""
     return NumericModel(
@@ -300,8 +304,9 @@ def fused_kernel(eom: Derivation) -> tuple[FusedKernel | None, str]:
         return fused, "reused"
     try:
         fused, status = build_fused(eom)
-    except Exception:  # a function the math module lacks (Piecewise, ...): keep the templates
-        fused, status = None, "off"
+    except Exception as e:
+        # a function the math module lacks (Piecewise, ...): the template kernels evaluate
+        fused, status = None, f"failed: {type(e).__name__}: {str(e)[:200]}"
     if fused is not None:
         _FUSED[eom] = weakref.ref(fused)
     return fused, status

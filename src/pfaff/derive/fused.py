@@ -420,11 +420,8 @@ def _llvm_factory(eom: Derivation, key: str | None) -> Callable[[], Callable | N
         if not build:
             return None
         done.append(None)
-        try:
-            (mass, acon, exprs, _), args = _parts(eom)
-            done[0] = _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
-        except Exception:
-            return None
+        (mass, acon, exprs, _), args = _parts(eom)  # a failure is reported by MachineCode
+        done[0] = _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
         if key is not None:
             with contextlib.suppress(Exception):
                 cache.store(key, "llvm", pickle.dumps(done[0]))

@@ -29,10 +29,10 @@ from pfaff.numeric.linearization import (
     TOL,
     Linearization,
     OperatingMatrices,
-    check_steady,
     complement,
     reduce_linear,
 )
+from pfaff.numeric.linearizer import check_steady
 
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
@@ -605,7 +605,7 @@ def linearize_at(
 
 
 class _Kernel:
-    """:class:`pfaff.numeric.linearization.LinearizationKernel` of a :class:`CompiledLinearizer`:
+    """:class:`pfaff.numeric.linearizer.LinearizationKernel` of a :class:`CompiledLinearizer`:
     its generated functions for these inputs (shared with the factory's other kernels)."""
 
     def __init__(self, factory: CompiledLinearizer, inputs: tuple[int, ...]) -> None:
@@ -648,7 +648,7 @@ INPUT = ("E_u", "G_u", "V_u")
 
 
 class CompiledLinearizer:
-    """The :class:`pfaff.numeric.linearization.LinearizerFactory` of a derivation: what
+    """The :class:`pfaff.numeric.linearizer.LinearizerFactory` of a derivation: what
     :meth:`pfaff.NumericModel.linearize` evaluates.
 
     On the first request the equations' :class:`LinearForms` (no inputs: every parameter is an

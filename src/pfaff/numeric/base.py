@@ -15,19 +15,20 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import StateError
+from pfaff.core.errors import ModelTypeError, StateError
 from pfaff.core.lazy import NumberedNames
-from pfaff.numeric.checks import check_finite, check_state, projection_options, real_vector
+from pfaff.numeric.checks import check_finite, check_state
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
 from pfaff.numeric.parts import ConStreams, DynStreams
 from pfaff.numeric.pattern import KKTPattern, coo
-from pfaff.numeric.projection import ArrayLinearization, newton_projection
+from pfaff.numeric.projection import ArrayLinearization
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
+from pfaff.numeric.quantities import Quantities
 from pfaff.numeric.streams import add_product, scatter_add, take
 from pfaff.numeric.value import ModelValue
 
 
-class StreamModel(ModelValue):
+class StreamModel(Quantities, ModelValue):
     """The numeric model of any system over template streams: the shared part of both kinds.
 
     Evaluation (M, Q − h, A, b, Ȧq̇ + ḃ, f, energies, power) runs the template kernels
@@ -82,6 +83,19 @@ class StreamModel(ModelValue):
         # parameter values (pfaff.derive.compile.Restream); None: the values are fixed
         self._restream = restream
         self.timings: dict[str, float | str] = dict(timings or {})
+
+    evaluator = "template"  # (general models choose theirs: pfaff.numeric.evaluator)
+
+    def compile_machine_code(self) -> bool:
+        """False: this model evaluates with its template kernels (no machine code)."""
+        return False
+
+    def linearize(self, *args: object, **kwargs: object) -> object:
+        """Refused: only general models linearize (:meth:`pfaff.NumericModel.linearize`)."""
+        raise ModelTypeError(
+            "models with families cannot linearize yet: compile the system without families "
+            "(pfaff.models.rolling_ring(N, family=False)) to linearize it"
+        )
 
     def _fresh_run_parts(self) -> None:
         d = self.__dict__
@@ -228,58 +242,6 @@ class StreamModel(ModelValue):
         check_finite(t, "the constraint residual", f, g)
         return f, g
 
-    def acceleration_residual(self, t: float, q: object, qd: object, qdd: object) -> np.ndarray:
-        """A q̈ + Ȧq̇ + ḃ, shape (m,): zero for accelerations that satisfy the constraints."""
-        t, q, qd = self._state(t, q, qd)
-        qdd = real_vector(qdd, "qdd", self.n)
-        avals, bias = self._accel_constraints(t, q, qd)
-        return self.a_matvec(avals, qdd) + self._rows_vector(bias)
-
-    def generalized_constraint_force(
-        self, t: float, q: object, qd: object, qdd: object
-    ) -> np.ndarray:
-        """M q̈ - (Q - h), shape (n,): the generalized constraint force Aᵀλ on a motion."""
-        t, q, qd = self._state(t, q, qd)
-        qdd = real_vector(qdd, "qdd", self.n)
-        mvals, f = self._dynamics(t, q, qd)
-        return self.matvec(mvals, qdd) - f
-
-    def constraint_force(self, t: float, q: object, lam: object) -> np.ndarray:
-        """Aᵀλ, shape (n,)."""
-        t, q, qd = self._state(t, q, np.zeros(self.n))
-        lam = real_vector(lam, "lam", self.m)
-        avals, _ = self._accel_constraints(t, q, qd)
-        y, tmp = np.zeros(self.n), self.scratch()
-        for part, vals in zip(self.con, avals, strict=True):
-            for c, val in zip(part.cols, vals, strict=True):
-                add_product(y, c, val, take(part.rows, lam), tmp)
-        return y
-
-    def energy(self, t: float, q: object, qd: object) -> tuple[float, float]:
-        """Kinetic and potential energy (T, V)."""
-        t, q, qd = self._state(t, q, qd)
-        TV = [part.energy(t, q, qd) for part in self.dyn]
-        return float(sum(x for x, _ in TV)), float(sum(v for _, v in TV))
-
-    @property
-    def applied_power(self) -> bool:
-        """True when some applied force can do work (see :meth:`power`)."""
-        return any(part.has_power for part in self.dyn)
-
-    def power(self, t: float, q: object, qd: object) -> float:
-        """Power of the applied forces, Qᵀq̇: the rate of the work W_nc in the energy balance."""
-        t, q, qd = self._state(t, q, qd)
-        return self.power_function()(t, q, qd)
-
-    def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
-        """:meth:`power` without the argument checks, for an integrator's checked states."""
-        parts = [part for part in self.dyn if part.has_power]
-
-        def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
-            return math.fsum(part.power(t, q, qd) for part in parts)
-
-        return power
-
     # ------------------------------------------------------------------ solves
     def solve(
         self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0
@@ -348,31 +310,6 @@ class StreamModel(ModelValue):
         f = np.where(self.holonomic, f, 0.0)
         return ArrayLinearization(
             f, g, np.sqrt(sq), tol, correct, correct, lambda v: self.residual(t, q, v)[1]
-        )
-
-    def project(
-        self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10
-    ) -> tuple[np.ndarray, np.ndarray, int]:
-        """Project (q, q̇) onto f(q, t) = 0 and A q̇ + b = 0, mass-orthogonally.
-
-        The projection the integrators use (:func:`pfaff.numeric.projection.newton_projection`)
-        at one state: Newton on the positions, then the velocities. Returns the new q, q̇ and
-        the number of Newton steps (1 when only the velocities moved; 0: nothing changed).
-
-        Examples
-        --------
-        >>> import pfaff
-        >>> model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
-        >>> q, qd, steps = model.project(0.0, [0.6, -0.9], [1.0, 1.0])
-        >>> bool(abs(q @ q - 1) < 1e-12 and abs(q @ qd) < 1e-12), steps > 0
-        (True, True)
-        """
-        t, q, qd = self._state(t, q, qd)
-        tol, max_iter = projection_options(tol, max_iter)
-        if not self.m:
-            return q, qd, 0
-        return newton_projection(
-            lambda q_, qd_: self.linearize_constraints(t, q_, qd_, tol), q, qd, max_iter=max_iter
         )
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:

@@ -109,8 +109,8 @@ class MachineCode:
         else:
             try:
                 compiled = self._build()
-            except (RuntimeError, ValueError, TypeError, MemoryError) as e:
-                reason = f"{type(e).__name__}: {e}"
+            except Exception as e:
+                reason = f"{type(e).__name__}: {str(e)[:200]}"
             if compiled is None and not reason:
                 reason = "SymEngine could not compile it"
             if compiled is not None:

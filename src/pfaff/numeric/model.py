@@ -13,7 +13,6 @@ model's evaluator (:mod:`pfaff.numeric.evaluator`), fixed when it is built.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,21 +20,19 @@ import scipy.sparse as sps
 
 from pfaff.core.errors import (
     ConstraintError,
-    InertiaError,
     PfaffError,
     StateError,
     raised_in_generated_code,
     undefined_at,
 )
 from pfaff.numeric.base import StreamModel
+from pfaff.numeric.checked import CheckedGeneral
 from pfaff.numeric.checks import check_finite
 from pfaff.numeric.evaluator import machine_rhs
 from pfaff.numeric.field import AccelerationField, not_real
 from pfaff.numeric.fused import FusedLinearization
-from pfaff.numeric.general import DENSE_LIMIT, GeneralParts, augmentation, fused_states
-from pfaff.numeric.inertia import inertia_test, undetermined_message
+from pfaff.numeric.general import DENSE_LIMIT, GeneralParts, fused_states
 from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, KKTSystem, SingularKKT, SparseSolver, row_scales
-from pfaff.numeric.linearization import linearize_model
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization
@@ -44,14 +41,12 @@ from pfaff.numeric.solvers import names
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from pfaff.numeric.linearization import Linearization
-
 
 SOLVERS = names("general")
 __all__ = ["DENSE_LIMIT", "SOLVERS", "NumericModel"]
 
 
-class NumericModel(GeneralParts, StreamModel):
+class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
     """Compiled equations of motion for one set of parameter values: an immutable value.
 
     Attributes
@@ -81,24 +76,6 @@ class NumericModel(GeneralParts, StreamModel):
     """
 
     # ------------------------------------------------------------------ assembly
-    def mass_matrix(
-        self, t: float, q: object, qd: object | None = None
-    ) -> np.ndarray | sps.csr_matrix:
-        """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix."""
-        M = super().mass_matrix(t, q, qd)
-        return M.toarray() if self.dense else M
-
-    def constraint_matrix(self, t: float, q: object) -> np.ndarray | sps.csr_matrix:
-        """A(q, t), shape (m, n): dense when small, else CSR."""
-        A = super().constraint_matrix(t, q)
-        return A.toarray() if self.dense else A
-
-    def kkt_matrix(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
-        """The symmetric augmented matrix [[M, Aᵀ], [A, 0]] and right-hand side [Q - h; -bias]."""
-        t, q, qd = self._state(t, q, qd)
-        K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-        check_finite(t, "[[M, Aᵀ], [A, 0]] or its right-hand side", K, forcing, bias)
-        return K, np.concatenate([forcing, -bias])
 
     def _kkt(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """K, Q - h, b, Ȧq̇ + ḃ, f and g = A q̇ + b at an (unchecked) state."""
@@ -364,130 +341,6 @@ class NumericModel(GeneralParts, StreamModel):
         return np.asarray(self._kkt(t, q, qd)[3], dtype=float)
 
     # ------------------------------------------------------------------ checked, for users
-    def linearize(
-        self,
-        t: float,
-        q: object,
-        qd: object,
-        independent: object,
-        independent_speeds: object = None,
-        inputs: object = (),
-        *,
-        input_values: Mapping[str, object] | None = None,
-    ) -> Linearization:
-        """Linearize about the state (q, q̇) at time t: ẋ = A x + B u (numeric).
-
-        The same as :meth:`pfaff.EquationsOfMotion.linearize` with this model's parameter
-        values, with exact derivatives (differentiated and generated into code once, on the
-        first call; then numeric work only); the coordinates of ``independent`` and
-        ``independent_speeds`` and the ``inputs`` (parameters) may be given by name.
-        ``input_values`` (input name -> value) sets inputs declared with ``System.add_input``
-        for this call only (one left out is 0); nothing is written into the model.
-        See :func:`pfaff.numeric.linearization.linearize_model`.
-
-        Examples
-        --------
-        >>> import pfaff
-        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
-        >>> model.linearize(0.0, [0.0], [0.0], ["theta"]).A
-        array([[ 0.  ,  1.  ],
-               [-9.81,  0.  ]])
-        """
-        return linearize_model(
-            self, t, q, qd, independent, independent_speeds, inputs, input_values
-        )
-
-    def accelerations(
-        self, t: float, q: object, qd: object, *, inputs: dict | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Solve M q̈ + h = Q + Aᵀλ, A q̈ + Ȧq̇ + ḃ = 0 for q̈ (shape (n,)) and λ (shape (m,)).
-
-        ``inputs``: the values of inputs declared with ``System.add_input``, by name, for this
-        call only (a missing input is 0); nothing is written into the model.
-
-        Examples
-        --------
-        >>> import numpy as np, pfaff
-        >>> sys = pfaff.models.rolling_ring(8, force=True)
-        >>> model = sys.equations().compile({"M": 1, "r": 0.5, "F": 2})
-        >>> q, qd = pfaff.models.ring_state(8, radius=0.5, theta=0.3)
-        >>> qdd, lam = model.accelerations(0.0, q, qd)
-        >>> round(float(qdd[1]), 12), round(float(lam[0]), 12)
-        (2.0, -1.0)
-
-        Raises
-        ------
-        InertiaError
-            Some acceleration is undetermined here (a coordinate without inertia that no
-            constraint fixes) or M is not positive definite on the admissible motions.
-        ConstraintError
-            The constraints are inconsistent here.
-        StateError
-            A bad state, or equations not defined at it (an overflow, a math domain error).
-        """
-        if inputs is not None:
-            return self._with_inputs(inputs).accelerations(t, q, qd)
-        with self._threads():
-            t, q, qd = self._state(t, q, qd)
-            if not self.dense:
-                try:
-                    return self.solve(t, q, qd)
-                except ConstraintError:
-                    self.check_determined(t, q, qd)  # the precise error when M is the cause
-                    raise
-            K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-            full = inertia_test(K, t, self.n, self.m, self.coordinate_names)
-            last = self._run_state["last"]
-            if not full and last is not None and last[0] == t and last[1] == q.tobytes():
-                if last[2] == qd.tobytes():  # the machine code solved this state with _kkt
-                    self._run_state["last"] = None
-                    return last[3][: self.n].copy(), last[3][self.n :].copy()
-            return self._solve_kkt(K, forcing, -bias, t, full=full)
-
-    def check_determined(self, t: float, q: object, qd: object) -> None:
-        """Check that M is positive definite on the admissible velocities at a state.
-
-        With Z an orthonormal basis of null(A), ZᵀMZ must be positive definite: else some
-        acceleration is undetermined (a coordinate without inertia that no constraint fixes) or
-        the kinetic energy is negative along an admissible motion. M itself may be singular
-        (quaternion attitude coordinates are, along the quaternion) as long as the constraints
-        fix what M leaves free; a run (:meth:`for_run`) then solves the whole augmented matrix
-        by LU: its mode, set here at its first state; a user's model keeps no mode. Dense models
-        pay one Cholesky factorization of M when M is safely positive definite, and an SVD of A
-        and an eigenvalue decomposition of ZᵀMZ only when it is not. Sparse models (n + m >
-        ``DENSE_LIMIT``) get the O(nnz) part of the test only: coordinates with neither a mass
-        entry nor a constraint entry. Then one solve: no acceleration may satisfy the
-        constraints here.
-
-        Raises
-        ------
-        InertiaError
-            Naming the coordinates that span the undetermined (or negative) directions.
-        ConstraintError
-            The constraints are inconsistent at this state.
-        """
-        t, q, qd = self._state(t, q, qd)
-        n, K = self.n, self._kkt(t, q, qd)[0]
-        run = self._run_state
-        if not self.dense:
-            Kc = sps.csc_matrix(K)
-            Kc.eliminate_zeros()
-            free = np.flatnonzero(np.diff(Kc.indptr)[:n] == 0)  # a column of zeros in M and A
-            if free.size:
-                raise InertiaError(undetermined_message(self.coordinate_names, t, free))
-        elif self._is_run:
-            run["full"], run["rho"] = False, 0.0  # the test below may raise: no stale mode
-            run["full"] = inertia_test(K, t, n, self.m, self.coordinate_names)
-            run["rho"] = augmentation(self, K, t, q, qd) if run["full"] else 0.0
-            full = run["full"]
-        else:
-            full = inertia_test(K, t, n, self.m, self.coordinate_names)
-        if self.m:
-            if self.dense and not self._is_run:
-                _, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-                self._solve_kkt(K, forcing, -bias, t, full=full)
-            else:
-                self._solve(t, q, qd)
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray

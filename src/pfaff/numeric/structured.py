@@ -77,6 +77,7 @@ class StructuredModel(StreamModel):
             holonomic=holonomic, parameters=parameters, **fields,
         )  # fmt: skip
         self.p = p  # ordinary (non-family) coordinates, first in q
+        self.timings["evaluator"] = "template"
         self.solver = "none"
         self._requested = solver
         if solver != "none":
