@@ -38,10 +38,12 @@ def cluster():
 
 
 def same_runs(a, b) -> None:
+    """Bit for bit: the same compiled model (shipped), evaluator and thread policy everywhere."""
     assert (a.status.values == b.status.values).all()
-    np.testing.assert_allclose(a.q.values, b.q.values, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(a.qd.values, b.qd.values, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(a.energy_error.values, b.energy_error.values, rtol=1e-6, atol=1e-15)
+    np.testing.assert_array_equal(a.q.values, b.q.values)
+    np.testing.assert_array_equal(a.qd.values, b.qd.values)
+    np.testing.assert_array_equal(a.multipliers.values, b.multipliers.values)
+    np.testing.assert_array_equal(a.energy_error.values, b.energy_error.values)
 
 
 def test_default_local_cluster_matches_this_process(pendulum):
@@ -59,7 +61,6 @@ def test_existing_cluster_by_address_and_client(cluster, cartesian):
     ref = pfaff.sweep(cartesian, vary, scheduler="synchronous")
     ds = pfaff.sweep(cartesian, vary, scheduler=cluster.scheduler_address, progress=False)
     same_runs(ds, ref)
-    np.testing.assert_allclose(ds.multipliers.values, ref.multipliers.values, rtol=1e-10)
     with Client(cluster) as client:  # a client of the caller's: used, left open
         ds = pfaff.sweep(cartesian, vary, scheduler=client, progress=False)
         assert client.status == "running"
