@@ -22,6 +22,23 @@ Rows (wall-clock seconds, the best of ``--repeat``):
     timing (its start-up is printed apart) and warm (pfaff imported, the model compiled once per
     worker by a first sweep, as a second sweep on a running cluster would find it).
 
+``ship`` (a second table; ``--ship-links 0`` leaves it out)
+    A sweep of a chain of ``--ship-links`` (default 7) pendulum links in absolute angles (a model
+    file whose derivation and compilation cost about a second; n = 7: the generated Python; at
+    n = 8 the shipped model's machine code is lost in the pickle and every run fails) on a
+    fresh local cluster of 2 workers, ``--ship-n``² runs of 2 s, in two modes: ``shipped`` (the
+    default: the spec carries the compiled model pickled by
+    :func:`pfaff.sweep.driver.shipped_model`, each worker unpickles it) and ``derived in workers``
+    (``shipped_model`` patched to return None: each worker derives and compiles the file itself).
+    ``cold s`` is the wall time of the first sweep on a fresh cluster (the driver's own derivation
+    and compilation included for ``shipped``), ``warm s`` a second sweep on the same cluster; the
+    per-worker setup (unpickle, or derive + compile; then one ``accelerations`` call) is timed
+    inside each worker of another fresh cluster, as the first thing it does; ``driver s`` is
+    ``shipped_model`` alone (SymPy's cache cleared). Both with pfaff's on-disk code cache on (a
+    file swept before on this machine) and off (``PFAFF_CACHE=0`` for the driver and the workers:
+    a new file, or workers on other machines). The modes alternate ``--ship-repeat`` times
+    (default 3) and the table gives medians.
+
 The speed-up is the plain process's time over the row's; ``run s`` is the sum of the runs' own
 wall times (inside the workers for the Dask rows): well above the plain row's, the runs were
 slowed down by sharing the cores (other processes), not by Dask. Each result is checked equal to the
@@ -38,10 +55,13 @@ Run (from the project root)::
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import logging
 import os
+import pickle
 import platform
+import statistics
 import sys
 import tempfile
 import time
@@ -50,6 +70,8 @@ from pathlib import Path
 import numpy as np
 
 import pfaff
+
+driver = importlib.import_module("pfaff.sweep.driver")  # (pfaff.sweep is the function)
 
 PENDULUM = """
 [model]
@@ -102,10 +124,18 @@ def main() -> None:
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--quick", action="store_true", help="64 runs of 2 s")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--ship-links", type=int, default=7, help="chain of the ship table (0: none)")
+    ap.add_argument("--ship-n", type=int, default=4, help="ship table: values per axis (n²)")
+    ap.add_argument("--ship-repeat", type=int, default=3, help="ship table: alternations")
+    ap.add_argument("--ship-only", action="store_true", help="only the ship table")
     args = ap.parse_args()
     if args.quick:
         args.n, args.t_end, args.repeat = 8, 2.0, 1
     from distributed import LocalCluster
+
+    if args.ship_only:
+        ship_table(args.ship_links, args.ship_n, args.ship_repeat)
+        return
 
     folder = Path(tempfile.mkdtemp(prefix="pfaff-bench-sweep-"))
     path = folder / "pendulum.toml"
@@ -150,6 +180,9 @@ def main() -> None:
         finally:
             cluster.close()
     report(rows, runs, args, t_plain, starts)
+    if args.ship_links and not args.json:
+        print()
+        ship_table(args.ship_links, args.ship_n, args.ship_repeat)
 
 
 def report(rows: list, runs: int, args: argparse.Namespace, t_plain: float, starts: dict) -> None:
@@ -177,6 +210,152 @@ def report(rows: list, runs: int, args: argparse.Namespace, t_plain: float, star
         )
     for n, s in starts.items():
         print(f"local cluster of {n} worker(s): started in {s:.1f} s (not in the rows)")
+
+
+# ------------------------------------------------------------------ the shipped compiled model
+def chain_file(links: int) -> str:
+    """A model file: ``links`` point masses m on massless links of length l, absolute angles."""
+    names = [f"th{i}" for i in range(1, links + 1)]
+    text = [
+        "[model]",
+        f'name = "{links}-link chain"',
+        "coordinates = [" + ", ".join(f'"{c}"' for c in names) + "]",
+        "parameters = { m = 1.0, l = 0.5, g = 9.81 }",
+        "",
+    ]
+    xs: list[str] = []
+    ys: list[str] = []
+    for c in names:
+        xs.append(f"l*sin({c})")
+        ys.append(f"l*cos({c})")
+        x, y = " + ".join(xs), " + ".join(ys)
+        text += ["[[particles]]", 'mass = "m"', f'position = ["{x}", "-({y})"]', ""]
+    text += ["[initial]", "q = { " + ", ".join(f"{c} = 0.1" for c in names) + " }", ""]
+    text += ["[simulate]", "t_end = 2.0", ""]
+    return "\n".join(text)
+
+
+def worker_setup_seconds(spec) -> float:
+    """In a worker: seconds from the spec to a model ready to run (what a worker pays once)."""
+    import sympy  # noqa: F401  (imports out of the timing)
+
+    from pfaff.sweep.worker import _Compiled
+
+    start = time.perf_counter()
+    entry = _Compiled(spec)
+    params, q0, qd0 = spec.run_inputs(0)
+    entry.model(params).accelerations(0.0, q0, qd0)
+    return time.perf_counter() - start
+
+
+def ship_table(links: int, n: int, repeat: int) -> None:
+    """Sweeps on 2 fresh workers: the compiled model shipped pickled against derived in each,
+    with pfaff's on-disk code cache on (a second sweep of the file on this machine) and off (a
+    first one, or workers on other machines)."""
+    from dataclasses import replace
+
+    import sympy
+    from distributed import Client, LocalCluster
+
+    from pfaff.sweep.grid import make_grid
+    from pfaff.sweep.worker import SweepSpec
+
+    folder = Path(tempfile.mkdtemp(prefix="pfaff-bench-ship-"))
+    path = folder / "chain.toml"
+    path.write_text(chain_file(links))
+    mf = pfaff.load_model(path)
+    coords = [f"th{i}" for i in range(1, links + 1)]
+    vary = {"l": np.linspace(0.3, 0.6, n), "q0.th1": np.linspace(0.1, 0.8, n)}
+    real = driver.shipped_model
+    blob = real(mf)  # fills the on-disk cache
+    assert blob is not None
+    base = SweepSpec(
+        text=path.read_text(),
+        filename=path.name,
+        parameters=dict(mf.parameters),
+        q0=tuple(float(x) for x in mf.q0),
+        qd0=tuple(float(x) for x in mf.qd0),
+        coordinates=tuple(coords),
+        grid=make_grid(vary, list(mf.parameters), coords),
+        t_eval=np.linspace(0.0, 2.0, 201),
+    )
+    specs = {"shipped": replace(base, model=blob), "derived in workers": base}
+
+    def cluster() -> LocalCluster:
+        return LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )  # fmt: skip
+
+    saved = os.environ.get("PFAFF_CACHE")
+    got: dict[tuple[str, str], dict[str, list[float]]] = {}
+    driver_s: dict[str, list[float]] = {}
+    ref = None
+    try:
+        for cache in ("on", "off"):
+            os.environ["PFAFF_CACHE"] = "1" if cache == "on" else "0"  # the workers inherit it
+            for i in range(repeat):
+                sympy.core.cache.clear_cache()
+                start = time.perf_counter()
+                real(pfaff.load_model(path))
+                driver_s.setdefault(cache, []).append(time.perf_counter() - start)
+                order = list(specs) if i % 2 == 0 else list(specs)[::-1]
+                for mode in order:
+                    res = got.setdefault((cache, mode), {})
+                    driver.shipped_model = real if mode == "shipped" else (lambda _mf: None)
+                    try:
+                        with cluster() as c, Client(c) as client:
+                            client.wait_for_workers(2)
+                            client.run(lambda: __import__("pfaff.sweep.worker"))
+                            setup = client.run(worker_setup_seconds, specs[mode])
+                        res.setdefault("setup", []).extend(setup.values())
+                        with cluster() as c:
+                            for label in ("cold", "warm"):
+                                start = time.perf_counter()
+                                ds = pfaff.sweep(
+                                    path, vary, scheduler=c.scheduler_address, progress=False
+                                )
+                                res.setdefault(label, []).append(time.perf_counter() - start)
+                                assert int(ds.attrs["failed"]) == 0
+                                ref = ds.q.values if ref is None else ref
+                                np.testing.assert_allclose(ds.q.values, ref, rtol=0, atol=1e-12)
+                    finally:
+                        driver.shipped_model = real
+    finally:
+        if saved is None:
+            os.environ.pop("PFAFF_CACHE", None)
+        else:
+            os.environ["PFAFF_CACHE"] = saved
+    load = os.getloadavg()
+    print(
+        f"shipped compiled model vs derived in workers: {links}-link chain (n = {links}), "
+        f"{n * n} runs of 2 s, 2 fresh workers; medians of {repeat}; load average "
+        f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
+    )
+    start = time.perf_counter()
+    pickle.loads(blob)
+    print(
+        f"the pickled model: {len(blob) / 1024:.0f} KiB, unpickled here in "
+        f"{time.perf_counter() - start:.3f} s; wall s: cold = first sweep on a fresh cluster "
+        "(driver's shipped_model included), warm = a second one on it; setup = per worker, "
+        "from the spec to one accelerations call (unpickle, or derive + compile)"
+    )
+    head = (
+        f"{'disk cache':<10} {'mode':<20} {'driver s':>9} {'cold s':>8} {'warm s':>8} "
+        f"{'setup/worker s':>15}"
+    )
+    print(head)
+    print("-" * len(head))
+    for (cache, mode), res in got.items():
+        med = {k: statistics.median(v) for k, v in res.items()}
+        drv = statistics.median(driver_s[cache]) if mode == "shipped" else 0.0
+        print(
+            f"{cache:<10} {mode:<20} {drv:>9.3f} {med['cold']:>8.2f} {med['warm']:>8.2f} "
+            f"{med['setup']:>15.3f}"
+        )
+    for cache in driver_s:
+        ship, own = (statistics.median(got[cache, m]["setup"]) for m in specs)
+        print(f"cache {cache}: per-worker setup, derived / shipped = {own / ship:.1f}x")
 
 
 if __name__ == "__main__":

@@ -147,7 +147,7 @@ def test_singular_mass_matrix_simulates(method: str) -> None:
 
 def test_inertia_check_runs_once_per_run(monkeypatch: pytest.MonkeyPatch) -> None:
     """The O(n³) test belongs to the first state, never to the right-hand side."""
-    import pfaff.numeric.model as numeric_model
+    import pfaff.numeric.checked as numeric_model
 
     calls = []
     inner = numeric_model.inertia_test

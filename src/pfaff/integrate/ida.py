@@ -81,9 +81,7 @@ class IDAStepper(Stepper):
             **kw,
         )
         # M singular (quaternion coordinates): the augmented Lagrangian M + ρAᵀA (see _residual)
-        self.rho = (
-            self._augmentation(t0, q0, qd0) if getattr(model, "mass_singular", False) else 0.0
-        )
+        self.rho = self._augmentation(t0, q0, qd0) if model.mass_singular else 0.0
         qdd0, lam0 = model.solve(t0, q0, qd0)
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])

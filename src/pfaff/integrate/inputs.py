@@ -12,13 +12,15 @@ one); models whose kernels fold the values in are refused with a clear error.
 from __future__ import annotations
 
 import inspect
+import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import OptionError, StateError
+from pfaff.core.errors import ConstraintError, OptionError, StateError
 from pfaff.numeric.checks import real_number
+from pfaff.numeric.general import fused_states
 
 
 def _arity(fn: Callable, name: str) -> int:
@@ -58,7 +60,7 @@ class DrivenModel:
     """
 
     def __init__(self, run: Any, inputs: Mapping[str, object]) -> None:
-        declared = list(getattr(run, "inputs", ()))
+        declared = list(run.inputs)
         if not isinstance(inputs, Mapping):
             raise OptionError(f"`inputs` must be a dict of input name -> value, got {inputs!r:.60}")
         if not run._runtime_parameters():
@@ -95,14 +97,14 @@ class DrivenModel:
 
     def set(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         """Write the inputs' values at (t, q, q̇) into the run's parameter vector."""
-        p = self._p
+        p, isfinite = self._p, math.isfinite
         for i, name, kind, u in self._slots:
             if kind == 0:
                 p[i] = u  # type: ignore[assignment]
-            elif kind == 1:
-                p[i] = _value(u(t), name, t)  # type: ignore[operator]
-            else:
-                p[i] = _value(u(t, q, qd), name, t)  # type: ignore[operator]
+                continue
+            v = u(t) if kind == 1 else u(t, q, qd)  # type: ignore[operator]
+            # the common case, a finite float (np.float64 too), without the full check
+            p[i] = v if v.__class__ in _FLOATS and isfinite(v) else _value(v, name, t)
 
     # the methods of the DynamicsModel protocol, each after setting the inputs
     def solve(self, t: float, q: np.ndarray, qd: np.ndarray, alpha: float = 0.0, beta: float = 0.0):
@@ -147,23 +149,35 @@ class DrivenModel:
         torques do: h does not depend on them)."""
         model, p = self._model, self._p
         power = model.power_function()
-        base = list(self._base)
+        base = list(p)
+        for (i, *_), v in zip(self._slots, self._base, strict=True):
+            base[i] = v
+        fn, o = model._fused.fn, model._fused.offsets  # (inputs need the fused kernel)
 
         def pw(t: float, q: np.ndarray, qd: np.ndarray) -> float:
             self.set(t, q, qd)
-            driven = np.array(model._kkt(t, q, qd)[1], dtype=float)
-            now = [p[i] for i, *_ in self._slots]
-            for (i, *_), v in zip(self._slots, base, strict=True):
-                p[i] = v
-            at_base = np.array(model._kkt(t, q, qd)[1], dtype=float)
-            for (i, *_), v in zip(self._slots, now, strict=True):
-                p[i] = v
-            return float(power(t, q, qd)) + float(qd @ (driven - at_base))
+            ql, qdl = q.tolist(), qd.tolist()
+            driven = fn(t, *ql, *qdl, *p)[o[0] : o[1]]  # Q − h: the kernel's forcing outputs
+            at_base = fn(t, *ql, *qdl, *base)[o[0] : o[1]]
+            extra = math.fsum(v * (a - b) for v, a, b in zip(qdl, driven, at_base, strict=True))
+            return float(power(t, q, qd)) + extra
 
         return pw
 
     def evaluate_states(self, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> dict:
-        """What a trajectory reports, state by state (the inputs change between them)."""
+        """What a trajectory reports: the inputs' values per state, then all states at once
+        through the fused kernel (state by state where M is singular)."""
+        model = self._model
+        if len(t) and not model.mass_singular:
+            params = [np.full(len(t), v) for v in self._p]
+            for k in range(len(t)):
+                self.set(float(t[k]), q[k], qd[k])
+                for i, *_ in self._slots:
+                    params[i][k] = self._p[i]
+            try:
+                return fused_states(model, np.asarray(t, dtype=float), q, qd, params)
+            except (np.linalg.LinAlgError, ConstraintError):
+                pass  # a redundant configuration somewhere: state by state below
         parts = []
         for k in range(len(t)):
             self.set(float(t[k]), q[k], qd[k])
@@ -171,6 +185,9 @@ class DrivenModel:
         if not parts:
             return self._model.evaluate_states(t, q, qd)
         return {key: np.concatenate([d[key] for d in parts]) for key in parts[0]}
+
+
+_FLOATS = (float, np.float64)
 
 
 def _value(v: object, name: str, t: float | None) -> float:

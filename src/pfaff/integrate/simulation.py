@@ -366,7 +366,7 @@ def _simulate(
         project_output = not cls.reports_drift
     power = model.power_function() if model.applied_power else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
-    run.events = AttitudeEvents(getattr(model, "attitudes", ()))
+    run.events = AttitudeEvents(model.attitudes)
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
@@ -600,5 +600,5 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         parameters=dict(model.parameters),
         projector=projector if project_output else None,
         switches=list(run.switches),
-        geometry=getattr(model, "geometry", None),  # what Trajectory.animate draws
+        geometry=model.geometry,  # what Trajectory.animate draws
     )

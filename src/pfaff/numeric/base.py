@@ -85,6 +85,7 @@ class StreamModel(Quantities, ModelValue):
         self.timings: dict[str, float | str] = dict(timings or {})
 
     evaluator = "template"  # (general models choose theirs: pfaff.numeric.evaluator)
+    mass_singular = False  # (a general model's run finds it at its first state)
 
     def compile_machine_code(self) -> bool:
         """False: this model evaluates with its template kernels (no machine code)."""

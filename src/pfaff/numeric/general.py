@@ -245,13 +245,19 @@ def augmentation(
 
 
 def fused_states(
-    model: NumericModel, t: np.ndarray, q: np.ndarray, qd: np.ndarray
+    model: NumericModel,
+    t: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    params: list | None = None,
 ) -> dict[str, np.ndarray]:
     """:meth:`pfaff.NumericModel.evaluate_states` of a fused model: the NumPy kernel over all
-    states at once and a batched floored solve."""
+    states at once and a batched floored solve. ``params``: per parameter a value or an array of
+    shape (k,), one per state (inputs that change along a run); default: the model's values."""
     fk, k, n, N = model._fused, len(t), model.n, model.n + model.m
     assert fk is not None
-    args = [t, *q.T, *qd.T, *model._p]
+    p = list(model._p) if params is None else params
+    args = [t, *q.T, *qd.T, *p]
     vals = np.empty((k, fk.offsets[3] + model.m))
     for i, o in enumerate(fk.vfn(*args)):
         vals[:, i] = o
@@ -266,7 +272,7 @@ def fused_states(
         raise ConstraintError(model._singular_message(float(t[0])))
     g = np.einsum("kij,kj->ki", K[:, n:, :n], qd) + vals[:, o[2] : o[3]]
     T, V, T0 = (np.broadcast_to(e, (k,)).astype(float) for e in fk.efn(*args))
-    Tneg = np.broadcast_to(fk.efn(t, *q.T, *(-qd).T, *model._p)[0], (k,))
+    Tneg = np.broadcast_to(fk.efn(t, *q.T, *(-qd).T, *p)[0], (k,))
     T2 = 0.5 * (T + Tneg) - T0
     model.stats["kkt_solves"] += k
     return {"qdd": qdd, "multipliers": lam, "f": vals[:, o[3] :], "g": g, "T": T, "V": V,

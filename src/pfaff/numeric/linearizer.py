@@ -138,7 +138,7 @@ def _parameter_vector(model: Any, input_values: Mapping[str, object] | None) -> 
         raise OptionError(
             f"`input_values` must be a dict of input name -> value, got {input_values!r:.60}"
         )
-    declared = list(getattr(model, "inputs", ()))
+    declared = list(model.inputs)
     names = list(model.parameters)
     for name in declared:  # a declared input left out is 0 in this call
         if name in names:
@@ -167,7 +167,7 @@ def linearize_model(
 ) -> Linearization:
     """:meth:`pfaff.NumericModel.linearize`: the arguments checked, then
     :func:`linearize_kernel` with the model's :class:`LinearizerFactory`."""
-    factory = getattr(model, "linearizer", None)
+    factory = model.linearizer
     if factory is None:
         raise ModelError(
             "this model cannot be linearized: compile it with EquationsOfMotion.compile "

@@ -23,7 +23,7 @@ float arrays of shape (n,)), where a check would cost more than the evaluation.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -104,6 +104,17 @@ class DynamicsModel(Protocol):
         The name of its KKT solver (:mod:`pfaff.numeric.kkt`).
     applied_power : bool
         Whether some applied force can do work.
+    inputs : list of str
+        Inputs declared with ``System.add_input`` (values per call or per run).
+    attitudes : tuple
+        Per rigid body (name, attitude kind, coordinate indices, Euler sequence):
+        :mod:`pfaff.integrate.events`.
+    geometry : object or None
+        What animations draw (:mod:`pfaff.derive.geometry`).
+    evaluator : str
+        Which code evaluates a state (:mod:`pfaff.numeric.evaluator`).
+    mass_singular : bool
+        M found singular at a run's first state (the run solves the whole KKT matrix).
     """
 
     n: int
@@ -112,16 +123,23 @@ class DynamicsModel(Protocol):
     multiplier_names: Sequence[str]
     constraint_names: Sequence[str]
     holonomic: np.ndarray
-    parameters: dict
+    parameters: Mapping[str, float]
     stats: dict
     solver: str
+    inputs: list[str]
+    attitudes: tuple
+    geometry: object
+    evaluator: str
+    mass_singular: bool
 
     @property
     def applied_power(self) -> bool: ...
 
     # ------------------------------------------------------------------ checked, for users
-    def accelerations(self, t: float, q: object, qd: object) -> tuple[Vector, Vector]:
-        """q̈ (n,) and λ (m,) at a state."""
+    def accelerations(
+        self, t: float, q: object, qd: object, *, inputs: dict | None = None
+    ) -> tuple[Vector, Vector]:
+        """q̈ (n,) and λ (m,) at a state (``inputs``: declared inputs' values for this call)."""
         ...
 
     def constraint_residual(self, t: float, q: object, qd: object) -> tuple[Vector, Vector]:

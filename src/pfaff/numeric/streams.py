@@ -26,8 +26,11 @@ from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.trig import sincos, workspace
 
 CHUNK = 1 << 15  # instances per kernel call
-# NumPy releases the GIL inside ufunc loops: large kernels run their chunks on THREADS threads.
+# NumPy releases the GIL inside ufunc loops: large kernels run their chunks on THREADS threads
+# (PFAFF_KERNEL_THREADS=1 runs them on the calling thread; benchmarks/threads.py measures both).
 THREADS = min(2, os.cpu_count() or 1)
+if os.environ.get("PFAFF_KERNEL_THREADS", "").strip() in ("1", "2"):
+    THREADS = min(int(os.environ["PFAFF_KERNEL_THREADS"]), os.cpu_count() or 1)
 PARALLEL_FROM = 1 << 20
 # OpenBLAS runs level-1 calls (daxpy, ddot) below 10,000 elements on the calling thread; on longer
 # vectors it wakes its own threads, whose wake-up and spin-wait cost more than the call at 2^16

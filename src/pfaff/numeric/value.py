@@ -271,7 +271,7 @@ class ModelValue:
         for k, v in state.items():
             object.__setattr__(self, k, v)
         object.__setattr__(self, "stats", {"kkt_solves": 0})
-        if getattr(self, "solver", None) and self.solver not in ("none",):
+        if self.__dict__.get("solver", "none") != "none":
             self.stats["solver"] = self.solver
         self._restored()
         self._freeze()
