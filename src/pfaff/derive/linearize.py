@@ -691,7 +691,8 @@ class CompiledLinearizer:
         self.coordinates = tuple(eom.coordinates)
         self.speeds = tuple(speed(c) for c in eom.coordinates)
         self.parameters = tuple(eom.parameters)
-        self.holonomic_rows = [i for i, f in enumerate(eom.holonomic_constraints) if f is not None]
+        # (the flags, not the constraint expressions: nothing is assembled before the first call)
+        self.holonomic_rows = [i for i, h in enumerate(eom.holonomic) if h]
         self._forms: LinearForms | None = None
         self._fns: dict = {}
         self._kernels: dict[tuple[int, ...], _Kernel] = {}
