@@ -21,6 +21,7 @@ from pfaff.core.errors import (
     OptionError,
     ParameterError,
     PfaffError,
+    RedundancyWarning,
     SimulationError,
     StateError,
 )
@@ -57,6 +58,7 @@ __all__ = [
     "PfaffError",
     "PlanarAngle",
     "Quaternion",
+    "RedundancyWarning",
     "RootLocus",
     "SimulationError",
     "Solution",

@@ -131,16 +131,41 @@ def test_simulation_closed_form(model: DynamicsModel) -> None:
     assert np.abs(traj.constraint_residual).max() < 1e-10
 
 
-def test_singular_configuration_is_a_clear_error() -> None:
-    """Two copies of one constraint: every solver of the general kind names the problem."""
+def test_redundant_constraints_every_general_solver() -> None:
+    """Two multiples of one constraint: reported, the motion exact, λ minimum-norm.
+
+    The particle slides down the line x = y under gravity: q̈ = (−g/2, −g/2), the constraint
+    force Aᵀλ = M q̈ − F = (−g/2, g/2) = (λ_a + 2λ_b)(1, −1); the minimum-norm λ is along (1, 2):
+    λ_a = −g/10, λ_b = −g/5. The null space of Aᵀ is (2, −1)/√5."""
     x, y = pfaff.coordinates("x y")
+    g = 9.81
     for solver in ("range-space", "lu", "sparse"):
         s = pfaff.System([x, y])
         s.add_particle(1.0, [x, y])
+        s.add_potential_energy(g * y)
         s.add_holonomic_constraint(x - y, name="a")
         s.add_holonomic_constraint(2 * x - 2 * y, name="b")
-        with pytest.raises(pfaff.ConstraintError, match="`a`"):
-            s.equations().compile({}, solver=solver)
+        with pytest.warns(pfaff.RedundancyWarning, match="`a`, `b` depend on one another"):
+            eom = s.equations()
+        assert eom.redundant_sets == [["a", "b"]]
+        model = eom.compile({}, solver=solver)
+        with pytest.warns(pfaff.RedundancyWarning):
+            qdd, lam = model.accelerations(0.0, [0.3, 0.3], [0.1, 0.1])
+        np.testing.assert_allclose(qdd, [-g / 2, -g / 2], rtol=1e-12)
+        np.testing.assert_allclose(lam, [-g / 10, -g / 5], rtol=1e-12)
+        names, basis = model.redundancy(0.0, [0.3, 0.3], [0.1, 0.1])
+        assert names == ["a", "b"] and basis.shape == (2, 1)
+        np.testing.assert_allclose(np.abs(basis[:, 0]), [2 / 5**0.5, 1 / 5**0.5], rtol=1e-12)
+
+
+def test_contradicting_constraints_are_refused_naming_both() -> None:
+    x, y = pfaff.coordinates("x y")
+    s = pfaff.System([x, y])
+    s.add_particle(1.0, [x, y])
+    s.add_holonomic_constraint(x - 1, name="one")
+    s.add_holonomic_constraint(x - 2, name="two")
+    with pytest.raises(pfaff.ConstraintError, match="`one`, `two` cannot hold together"):
+        s.equations()
 
 
 def test_unknown_solver_is_refused() -> None:

@@ -17,6 +17,7 @@ __all__ = [
     "OptionError",
     "ParameterError",
     "PfaffError",
+    "RedundancyWarning",
     "SimulationError",
     "StateError",
 ]
@@ -66,6 +67,12 @@ class OptionError(PfaffError):
     Not a :class:`StateError`: a state is what a run starts from or computes, an option how it
     is computed.
     """
+
+
+class RedundancyWarning(UserWarning):
+    """Some constraints depend on one another: the motion is still determined, but on those rows
+    only Aᵀλ is; pfaff reports the minimum-norm multipliers (``model.redundancy`` names the
+    indeterminate directions)."""
 
 
 class SimulationError(PfaffError, RuntimeError):

@@ -165,6 +165,8 @@ class Derivation:
         parameters: tuple | None = None,
         extra: dict | None = None,
     ) -> None:
+        # sets of constraint names that depend on one another everywhere (derive.rank)
+        self.redundant_sets: list[list[str]] = []
         self.system = system
         self.blocks = blocks
         if system is not None:

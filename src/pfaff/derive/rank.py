@@ -1,70 +1,141 @@
-"""Generic-rank test of the constraint matrix: redundant or inconsistent constraints are refused.
+"""Generic-rank test of the constraint matrix: redundant constraints reported, inconsistent refused.
 
 A is evaluated at a random configuration with random parameter values; linear dependence that holds
-everywhere (a repeated, combined or contradictory constraint) shows there with probability one. The
-error names every constraint that takes part in the dependency (:func:`pfaff.numeric.rank.dependent_rows`).
+everywhere (a repeated, combined or contradictory constraint) shows there with probability one.
+Dependent rows form *sets* (rows that share a null vector of Aᵀ, :func:`redundant_sets`). A set is
+*consistent* when the constraints can hold together: from the random point, Gauss–Newton on the
+independent rows reaches the manifold they define, and there the dependent rows hold too (position
+rows: f = 0; every row: Aᵀ's null vectors annihilate b, so that A q̇ + b = 0 has solutions).
+Consistent sets are reported (a :class:`pfaff.RedundancyWarning` and ``eom.redundant_sets``); an
+inconsistent set is refused, naming every row of it. Redundancy that appears only on the
+constraint manifold (the Bricard linkage) is found at the first state of a run
+(:meth:`pfaff.NumericModel.redundancy`).
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sps
 import symengine
 
-from pfaff.core.errors import ConstraintError
+from pfaff.core.errors import ConstraintError, RedundancyWarning
 from pfaff.derive.compile import build_model
 from pfaff.derive.compile_family import structured_model
 from pfaff.derive.equations import Derivation
-from pfaff.numeric.rank import dependent_rows
+from pfaff.numeric.rank import dependent_rows, null_basis, redundant_sets
 
 NAMES_SHOWN = 8
+CONSISTENT = 1e-9  # a dependent row's residual on the manifold below this (relative): consistent
 
 
-def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> None:
-    """Raise :class:`ConstraintError` naming the constraints that depend on one another.
+def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> list[list[str]]:
+    """The sets of constraints that depend on one another everywhere (a warning names them), or
+    :class:`ConstraintError` naming every row of an inconsistent set.
 
     Examples
     --------
-    >>> import pfaff
+    >>> import warnings, pfaff
     >>> x, y = pfaff.coordinates("x y")
     >>> s = pfaff.System([x, y]); s.add_particle(1, [x, y])
     >>> s.add_holonomic_constraint(x - y, name="a"); s.add_holonomic_constraint(2 * x - 2 * y + 1, name="b")
     >>> s.equations()
     Traceback (most recent call last):
     ...
-    pfaff.core.errors.ConstraintError: redundant or inconsistent constraints: the constraint matrix has rank 1 < 2; `a`, `b` depend on one another
+    pfaff.core.errors.ConstraintError: inconsistent constraints: `a`, `b` cannot hold together (the constraint matrix has rank 1 < 2 and the rows contradict one another)
+    >>> s = pfaff.System([x, y]); s.add_particle(1, [x, y])
+    >>> s.add_holonomic_constraint(x - y, name="a"); s.add_holonomic_constraint(2 * x - 2 * y, name="b")
+    >>> with warnings.catch_warnings(record=True):
+    ...     s.equations().redundant_sets
+    [['a', 'b']]
     """
     n, m = eom.n, eom.m
     if m == 0:
-        return
-    if m > n:
-        raise ConstraintError(
-            f"{m} constraints on {n} coordinates: more constraints than coordinates"
-        )
+        return []
     rng = np.random.default_rng(seed)
     values = list(rng.uniform(0.7, 1.6, len(eom.parameters)))
     q = rng.uniform(-1.3, 1.3, n)
     tt = float(rng.uniform(0.1, 1.0))
+    model = None
     with np.errstate(all="ignore"):
         if eom.family:
             model = structured_model(eom, values, solver="none")
-            if model.proves_full_rank(tt, q):  # raises on a zero pivot
-                return
+            if m <= n and model.proves_full_rank(tt, q):  # raises on a zero pivot
+                return []
             A = model.constraint_matrix(tt, q)
         else:
             A = _engine_matrix(eom, values, q, tt)
             if A is None:
-                A = build_model(eom, values, constraints_only=True).constraint_matrix(tt, q)
+                model = build_model(eom, values, constraints_only=True)
+                A = model.constraint_matrix(tt, q)
     if not np.all(np.isfinite(A.data if sps.issparse(A) else A)):
-        return  # a singular random point; the numeric solve will report real problems
+        return []  # a singular random point; the numeric solve will report real problems
     rank, rows = dependent_rows(A)
-    if rows.size:
+    if not rows.size:
+        return []
+    names = eom.constraint_names
+    sets = redundant_sets(A)
+    if model is None:
+        model = build_model(eom, values, constraints_only=True)
+    bad = _inconsistent(model, tt, q, rows)
+    if bad.size:
         raise ConstraintError(
-            "redundant or inconsistent constraints: the constraint matrix has rank "
-            f"{rank} < {m}; {dependency_names(eom.constraint_names, rows)} depend on one another"
+            f"inconsistent constraints: {dependency_names(names, bad)} cannot hold together (the "
+            f"constraint matrix has rank {rank} < {m} and the rows contradict one another)"
         )
+    named = [[str(names[int(i)]) for i in s] for s in sets]
+    text = "; ".join(dependency_names(names, np.asarray(s)) for s in sets)
+    warnings.warn(
+        f"redundant constraints: the constraint matrix has rank {rank} < {m}; {text} depend on "
+        "one another. The motion is determined; on these rows only Aᵀλ is, and pfaff reports "
+        "the minimum-norm multipliers (eom.redundant_sets, model.redundancy)",
+        RedundancyWarning,
+        stacklevel=4,
+    )
+    return named
+
+
+def _inconsistent(model: object, t: float, q: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The dependent rows (of ``rows``) that do not hold where the independent rows do: empty
+    when the set is consistent (or when the manifold could not be reached: not refused then)."""
+    hol = np.asarray(model.holonomic, dtype=bool)  # type: ignore[attr-defined]
+    qd = np.zeros(model.n)  # type: ignore[attr-defined]
+    with np.errstate(all="ignore"):
+        for _ in range(30):  # Gauss–Newton on the independent position rows, minimum-norm steps
+            A = _dense(model.constraint_matrix(t, q))  # type: ignore[attr-defined]
+            f = np.where(hol, model.residual(t, q, qd)[0], 0.0)  # type: ignore[attr-defined]
+            if not np.all(np.isfinite(A)) or not np.all(np.isfinite(f)):
+                return np.zeros(0, dtype=np.int64)
+            step = scipy.linalg.lstsq(A[hol], f[hol], cond=1e-10)[0] if hol.any() else 0.0
+            q = q - step
+            if hol.any() and np.abs(step).max() < 1e-14 * (1 + np.abs(q).max()):
+                break
+        A = _dense(model.constraint_matrix(t, q))  # type: ignore[attr-defined]
+        f, g = model.residual(t, q, qd)  # type: ignore[attr-defined]
+    scale = 1.0 + np.abs(A).max() * (1 + np.abs(q).max())
+    Y = null_basis(A)
+    b = g  # A q̇ + b at q̇ = 0
+    off = np.zeros(model.m, dtype=bool)  # type: ignore[attr-defined]
+    if Y.shape[1]:
+        c = Y.T @ b  # null vectors of Aᵀ must annihilate b
+        for k in np.flatnonzero(np.abs(c) > CONSISTENT * scale * max(1.0, np.abs(b).max())):
+            off |= np.abs(Y[:, k]) > 1e-8
+    off |= hol & (np.abs(f) > CONSISTENT * scale)  # position rows left unsatisfied
+    off &= np.isin(np.arange(off.size), rows)
+    if off.any():  # name the whole set of each row found contradicting
+        sets = redundant_sets(A)
+        hit = [s for s in sets if off[np.asarray(s)].any()]
+        return (
+            np.unique(np.concatenate([np.asarray(s) for s in hit])) if hit else np.flatnonzero(off)
+        )
+    return np.zeros(0, dtype=np.int64)
+
+
+def _dense(A: object) -> np.ndarray:
+    return A.toarray() if sps.issparse(A) else np.asarray(A, dtype=float)  # type: ignore[attr-defined]
 
 
 ENGINE_ROWS = 512  # up to this many constraint rows, A is evaluated from SymEngine directly

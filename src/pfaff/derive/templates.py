@@ -281,6 +281,6 @@ def derive(system: SystemSpec) -> Derivation:
     # before anything of size n: the Derivation's constraint names and flags are per row
     check_memory(system.n, system.n_constraints, blocks)
     eom = Derivation(system, blocks)
-    check_constraint_rank(eom)
+    eom.redundant_sets = check_constraint_rank(eom)  # reported (warned), not refused
     eom.timings = {"equations": time.process_time() - start}
     return eom

@@ -601,4 +601,5 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         projector=projector if project_output else None,
         switches=list(run.switches),
         geometry=model.geometry,  # what Trajectory.animate draws
+        redundant_rows=ev.get("redundant_rows", np.zeros(len(T), dtype=np.int64)),
     )

@@ -615,17 +615,12 @@ class SystemSpec(ElementsMixin):
     ) -> None:
         if not coords and tmpl is None:
             raise ConstraintError(f"constraint `{label}` names no coordinate: {e} = 0")
-        count = 1 if tmpl is None else tmpl.count
-        if self.n_constraints + count > self.n:
-            raise ConstraintError(
-                f"constraint `{label}` would make {self.n_constraints + count} constraints on "
-                f"{self.n} coordinates: more independent constraints than coordinates is impossible"
-            )
         key = (*local, coords if tmpl is None else tmpl)
         if key in self._constraint_keys:
             raise ConstraintError(
-                f"constraint `{label}` repeats constraint `{self._constraint_keys[key]}`: "
-                "redundant constraints have no unique multipliers"
+                f"constraint `{label}` repeats constraint `{self._constraint_keys[key]}` exactly: "
+                "it carries no information (constraints that depend on one another otherwise are "
+                "accepted and reported: pfaff.RedundancyWarning)"
             )
         self._constraint_keys[key] = label
 

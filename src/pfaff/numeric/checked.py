@@ -15,6 +15,8 @@ from pfaff.numeric.checks import check_finite
 from pfaff.numeric.general import augmentation
 from pfaff.numeric.inertia import inertia_test, undetermined_message
 from pfaff.numeric.linearizer import linearize_model
+from pfaff.numeric.rank import null_basis
+from pfaff.numeric.redundant import dense_rows, independent_rows, persistent, warn
 
 if TYPE_CHECKING:
     from pfaff.numeric.linearization import Linearization
@@ -122,9 +124,19 @@ class CheckedGeneral:
                     return self.solve(t, q, qd)
                 except ConstraintError:
                     self.check_determined(t, q, qd)  # the precise error when M is the cause
-                    raise
+                    K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+                    A = dense_rows(K, self.n, t)  # redundant rows? (refused above REDUNDANT_DENSE)
+                    rows = independent_rows(A)
+                    if rows is None:
+                        raise
+                    warn(self.constraint_names, A, f"at t = {t:g}")
+                    return self._solve_kkt(K, forcing, -bias, t, rows=rows)
             K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
             full = inertia_test(K, t, self.n, self.m, self.coordinate_names)
+            rows = independent_rows(K[self.n :, : self.n]) if self.m else None
+            if rows is not None:  # redundant rows here: q̈ exact, λ minimum-norm
+                warn(self.constraint_names, K[self.n :, : self.n], f"at t = {t:g}")
+                return self._solve_kkt(K, forcing, -bias, t, full=full, rows=rows)
             last = self._run_state["last"]
             if not full and last is not None and last[0] == t and last[1] == q.tobytes():
                 if last[2] == qd.tobytes():  # the machine code solved this state with _kkt
@@ -164,15 +176,77 @@ class CheckedGeneral:
             if free.size:
                 raise InertiaError(undetermined_message(self.coordinate_names, t, free))
         elif self._is_run:
-            run["full"], run["rho"] = False, 0.0  # the test below may raise: no stale mode
+            run["full"], run["rho"], run["rows"] = False, 0.0, None  # no stale mode if it raises
             run["full"] = inertia_test(K, t, n, self.m, self.coordinate_names)
             run["rho"] = augmentation(self, K, t, q, qd) if run["full"] else 0.0
             full = run["full"]
+            run["rows"] = self._redundant_rows(K[n:, :n], t, q, qd)
         else:
             full = inertia_test(K, t, n, self.m, self.coordinate_names)
         if self.m:
             if self.dense and not self._is_run:
                 _, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-                self._solve_kkt(K, forcing, -bias, t, full=full)
+                rows = independent_rows(K[n:, :n])
+                self._solve_kkt(K, forcing, -bias, t, full=full, rows=rows)
+            elif not self.dense:
+                try:
+                    self._solve(t, q, qd)
+                except ConstraintError:  # redundant rows (persistent ones become the run's)
+                    A = dense_rows(K, n, t)
+                    rows = self._redundant_rows(A, t, q, qd) if self._is_run else None
+                    rows = independent_rows(A) if rows is None and not self._is_run else rows
+                    if rows is None:
+                        raise
+                    if self._is_run:
+                        run["rows"] = rows
+                    _, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+                    self._solve_kkt(K, forcing, -bias, t, rows=rows)
             else:
                 self._solve(t, q, qd)
+
+    def _redundant_rows(
+        self, A: np.ndarray, t: float, q: np.ndarray, qd: np.ndarray
+    ) -> np.ndarray | None:
+        """The independent rows a run keeps where its constraints are persistently redundant
+        (warned), else None: full rank, or an isolated rank loss (a fold: the floored solve
+        follows the branch). See :func:`pfaff.numeric.redundant.persistent`."""
+        rows = independent_rows(A) if self.m else None
+        if rows is None:
+            return None
+        n = self.n
+        hol = np.asarray(self.holonomic, dtype=bool)
+        if not persistent(
+            A, rows, q, lambda q_: self._kkt(t, q_, qd)[0][n:, :n],
+            lambda q_: self.residual(t, q_, qd)[0], hol,
+        ):  # fmt: skip
+            return None
+        warn(self.constraint_names, A, f"at the first state (t = {t:g})")
+        return rows
+
+    def redundancy(self, t: float, q: object, qd: object) -> tuple[list[str], np.ndarray]:
+        """The constraints and the indeterminate directions of their multipliers at a state.
+
+        Returns
+        -------
+        names : list of str
+            The constraint names, in row order.
+        basis : ndarray, shape (m, k)
+            An orthonormal basis of the null space of Aᵀ: λ + basis @ c gives the same
+            generalized constraint force Aᵀλ for every c, so on these directions only Aᵀλ is
+            determined (pfaff reports the minimum-norm λ, orthogonal to them). k = 0: none.
+
+        Examples
+        --------
+        >>> import numpy as np, pfaff
+        >>> ring = pfaff.models.rolling_ring(4, force=True, closed=True)
+        >>> import warnings; warnings.simplefilter("ignore")
+        >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
+        >>> q, qd = pfaff.models.ring_state(4, radius=0.5, theta=0.3)
+        >>> names, basis = model.redundancy(0.0, q, qd)
+        >>> basis.shape, np.round(np.abs(basis[:, 0]) * 2, 6).tolist()  # the hoop stress
+        ((5, 1), [0.0, 1.0, 1.0, 1.0, 1.0])
+        """
+        t, q, qd = self._state(t, q, qd)
+        A = np.asarray(self.constraint_matrix(t, q).todense() if sps.issparse(
+            self.constraint_matrix(t, q)) else self.constraint_matrix(t, q))  # fmt: skip
+        return list(self.constraint_names), null_basis(A)

@@ -11,6 +11,7 @@ import numpy as np
 from pfaff.core.errors import StateError
 from pfaff.numeric.kkt import FLOOR, RESCALE_BELOW
 from pfaff.numeric.protocol import OdeFunction
+from pfaff.numeric.redundant import independent_rows
 
 if TYPE_CHECKING:
     from pfaff.numeric.model import NumericModel
@@ -73,7 +74,15 @@ class AccelerationField(OdeFunction):
         return out
 
     def accepted(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        """Raise the reference row sizes to those at (t, q, q̇) while some row is small."""
+        """Raise the reference row sizes to those at (t, q, q̇) while some row is small; where
+        the run's constraints are redundant, choose its independent rows again (pivoted QR at
+        the accepted state: the set that is independent may change along the motion)."""
+        run = self.model._run_state
+        if run["rows"] is not None:
+            n = self.model.n
+            rows = independent_rows(self.model._kkt(t, q, qd)[0][n:, :n])
+            if rows is not None:
+                run["rows"] = rows
         if not self.active or self.scales is None:
             return
         now = self.model._row_scales(t, q, qd)

@@ -16,6 +16,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sps
 
 from pfaff.core.errors import (
@@ -36,6 +37,7 @@ from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, KKTSystem, SingularKKT, Sparse
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization
+from pfaff.numeric.redundant import independent_rows, min_norm_multipliers
 from pfaff.numeric.solvers import names
 
 if TYPE_CHECKING:
@@ -140,14 +142,24 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         floor: float = STATE_FLOOR,
         scales: np.ndarray | None = None,
         full: bool | None = None,
+        rows: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """q̈ and λ of K [q̈; −λ] = [Q − h; c] by the model's solver (:mod:`pfaff.numeric.kkt`).
+
+        ``rows`` (default: the run's, set where its constraints are redundant): solve with these
+        independent rows only and report the minimum-norm λ over all
+        (:mod:`pfaff.numeric.redundant`).
 
         ``full`` (default: the run's mode, set by :meth:`check_determined`): M singular or
         nearly so, where a Cholesky factorization of M may pass on rounding and return garbage:
         LU on the whole K. ``floor`` and ``scales``: the rank-loss floor (``FLOOR`` with row
         scales in integrators, ``STATE_FLOOR`` for single states).
         """
+        rows = self._run_state["rows"] if rows is None else rows
+        if rows is not None:
+            if sps.issparse(K):
+                K = K.toarray()  # (a model with redundant rows is at most REDUNDANT_DENSE large)
+            return self._solve_rows(K, forcing, c, t, rows, floor == STATE_FLOOR)
         self.stats["kkt_solves"] += 1
         full = self._run_state["full"] if full is None else full
         solver = self._lu if full and self.dense else self._solver
@@ -164,6 +176,29 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         if floor == STATE_FLOOR and self.dense and self.m:
             self._check_consistent(K[self.n :, : self.n], qdd, c, t)
         return qdd, lam  # type: ignore[return-value]
+
+    def _solve_rows(
+        self, K: np.ndarray, forcing: np.ndarray, c: np.ndarray, t: float, rows: np.ndarray,
+        check: bool,
+    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """q̈ from the independent ``rows`` (LU of the reduced augmented matrix), λ minimum-norm
+        over all rows; ``check``: every row's A q̈ = c (a contradiction on the path is named)."""
+        self.stats["kkt_solves"] += 1
+        n = self.n
+        idx = np.concatenate([np.arange(n), n + rows])
+        try:
+            sol = scipy.linalg.solve(K[np.ix_(idx, idx)], np.concatenate([forcing, c[rows]]))
+        except (np.linalg.LinAlgError, ValueError):
+            check_finite(t, "[[M, Aᵀ], [A, 0]], Q - h or Ȧq̇ + ḃ", K, forcing, c)
+            raise ConstraintError(self._singular_message(t)) from None
+        qdd, A = sol[:n], K[n:, :n]
+        lam = min_norm_multipliers(A, rows, -sol[n:])
+        if not math.isfinite(qdd.sum() + lam.sum()):
+            check_finite(t, "[[M, Aᵀ], [A, 0]], Q - h or Ȧq̇ + ḃ", K, forcing, c)
+            raise ConstraintError(self._singular_message(t))
+        if check:
+            self._check_consistent(A, qdd, c, t)
+        return qdd, lam
 
     def _check_consistent(self, A: np.ndarray, qdd: np.ndarray, c: np.ndarray, t: float) -> None:
         """A single state's q̈ must satisfy A q̈ = c: else the constraints are inconsistent here."""
@@ -182,7 +217,10 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         """Unchecked q̈, λ with the constraint rows' right-hand side −(Ȧq̇+ḃ) − 2αg − β²f
         (:class:`pfaff.numeric.protocol.DynamicsModel`). With machine code and no
         stabilization: one call of it (q̈ and λ with the kernel's outputs)."""
-        if self.evaluator == "machine" and not (alpha or beta or self._run_state["full"]):
+        run = self._run_state
+        if self.evaluator == "machine" and not (
+            alpha or beta or run["full"] or run["rows"] is not None
+        ):
             self._fused_values(t, q, qd)
             last = self._run_state["last"]
             if last is not None:
@@ -214,7 +252,12 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
 
     def _row_scales(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
         """Reference constraint row sizes for the integrators' floor (:func:`pfaff.numeric.kkt.row_scales`)."""
-        if not self.dense or not self.m or self._run_state["full"]:
+        if (
+            not self.dense
+            or not self.m
+            or self._run_state["full"]
+            or self._run_state["rows"] is not None
+        ):
             return None
         K = self._kkt(t, q, qd)[0]
         try:
@@ -253,6 +296,8 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
             qdd = self._solve(t, y[:n], y[n:], alpha, beta, floor=floor, scales=scales)[0]
             return yl[n:] + qdd.tolist()
 
+        if run["rows"] is not None:  # redundant rows: the exact reduced solve
+            return slow
         if run["full"] and run["rho"] and fk.rfn_aug is not None:  # M singular: M + ρAᵀA
             fixed = (alpha, beta, *([0.0] * (self.m + 1)), run["rho"], slow)
             make = fk.rfn_aug
@@ -285,7 +330,8 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         mass-metric corrections, on Python floats for small fused systems
         (:class:`pfaff.numeric.fused.FusedLinearization`), else on arrays."""
         fk = self._fused
-        if fk is not None and fk.cfn is not None and not self._run_state["full"]:
+        run = self._run_state
+        if fk is not None and fk.cfn is not None and not run["full"] and run["rows"] is None:
             try:
                 return FusedLinearization(
                     fk, t, q.tolist(), qd.tolist(), list(self._p), tol, self._holonomic_list,
@@ -301,6 +347,7 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         K, _, _, _, f, g = self._kkt(t, q, qd)
         n, cache = self.n, []
         A, M = K[n:, :n], K[:n, :n]
+        rows = self._run_state["rows"]
         if sps.issparse(K):  # the KKT solve with zero forcing: M⁻¹Aᵀ(A M⁻¹Aᵀ)⁻¹ r by SuperLU
             sq = np.asarray(A.multiply(A).sum(axis=1)).ravel()
             zeros = np.zeros(n)
@@ -312,9 +359,9 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
             sq = (A * A).sum(1)
 
             def correct(r: np.ndarray) -> np.ndarray:
-                if not cache:
-                    cache.append(mass_metric_correction(M, A))
-                return cache[0](r)
+                if not cache:  # redundant rows: the correction of the independent ones
+                    cache.append(mass_metric_correction(M, A if rows is None else A[rows]))
+                return cache[0](r if rows is None else r[rows])
 
         f = np.where(self.holonomic, f, 0.0)
         return ArrayLinearization(
@@ -360,12 +407,23 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         """
         t = np.asarray(t, dtype=float)
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-        if self._fused is not None and not self._run_state["full"]:  # a batched Cholesky of M
+        if (
+            self._fused is not None
+            and not self._run_state["full"]
+            and self._run_state["rows"] is None
+        ):
             try:
                 return fused_states(self, t, q, qd)
             except (np.linalg.LinAlgError, ConstraintError):
                 pass  # a redundant configuration somewhere: state by state below
-        return super().evaluate_states(t, q, qd)
+        out = super().evaluate_states(t, q, qd)
+        if self._run_state["rows"] is not None:  # redundant rows: how many, state by state
+            n, k = self.n, np.zeros(len(t), dtype=np.int64)
+            for i in range(len(t)):
+                rows = independent_rows(self._kkt(float(t[i]), q[i], qd[i])[0][n:, :n])
+                k[i] = 0 if rows is None else self.m - rows.size
+            out["redundant_rows"] = k
+        return out
 
     def _singular_message(self, t: float, e: Exception | None = None) -> str:
         msg = (

@@ -93,3 +93,54 @@ def _sparse_null_basis(A: sps.csr_matrix, seed: int) -> np.ndarray:
         if not null.all() or k == m:
             return np.linalg.qr(V @ Wt[null].T)[0] if null.any() else np.zeros((m, 0))
         k = min(m, 2 * k)
+
+
+def null_basis(A: np.ndarray | sps.spmatrix) -> np.ndarray:
+    """An orthonormal basis of null(Aᵀ), shape (m, m - rank) (dense SVD).
+
+    Examples
+    --------
+    >>> null_basis(np.array([[1.0, 0.0], [2.0, 0.0]])).round(6).ravel().tolist()
+    [-0.894427, 0.447214]
+    """
+    A = A.toarray() if sps.issparse(A) else np.asarray(A, dtype=float)
+    if A.shape[0] == 0:
+        return np.zeros((0, 0))
+    return _dense_null_basis(A)
+
+
+def redundant_sets(A: np.ndarray | sps.spmatrix) -> list[list[int]]:
+    """The rows of A grouped into sets that depend on one another: rows joined when a null
+    vector of Aᵀ (from a reduced echelon basis, so that independent dependencies stay apart) is
+    non-zero on both. Empty when the rows are independent.
+
+    Examples
+    --------
+    >>> A = np.array([[1.0, 0], [2.0, 0], [0, 1.0], [0, 3.0]])
+    >>> redundant_sets(A)
+    [[0, 1], [2, 3]]
+    """
+    Y = null_basis(A)
+    if Y.shape[1] == 0:
+        return []
+    # a sparse basis of the same space: the reduced echelon form of Yᵀ (pivoted QR then solve)
+    _, _, piv = scipy.linalg.qr(Y.T, pivoting=True, mode="economic")
+    k = Y.shape[1]
+    B = Y @ np.linalg.inv(Y[piv[:k]])  # rows piv[:k] of B are the identity
+    parent = list(range(A.shape[0]))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    support = np.abs(B) > SUPPORT_TOL * np.abs(B).max(axis=0, keepdims=True)
+    for col in support.T:
+        idx = np.flatnonzero(col)
+        for j in idx[1:]:
+            parent[find(int(j))] = find(int(idx[0]))
+    groups: dict[int, list[int]] = {}
+    for i in np.flatnonzero(support.any(axis=1)):
+        groups.setdefault(find(int(i)), []).append(int(i))
+    return sorted(groups.values())

@@ -98,7 +98,7 @@ class ModelValue:
 
     def _new_run_state(self) -> dict:
         """The per-run state: KKT mode, ρ, the machine code's last state, scratch buffers."""
-        return {"full": False, "rho": 0.0, "last": None, "live": False}
+        return {"full": False, "rho": 0.0, "last": None, "live": False, "rows": None}
 
     # ------------------------------------------------------------------ runs
     def for_run(self) -> Self:

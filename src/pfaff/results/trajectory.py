@@ -46,6 +46,10 @@ class Trajectory:
     coordinate_names, multiplier_names : list of str
     switches : list of (float, str)
         (t, body name) of every MRP shadow-set switch (empty without MRPs).
+    redundant_rows : ndarray of int, shape (k,)
+        Per reported time, how many constraint rows depend on the others (the dimension of
+        the null space of Aᵀ): on those directions only Aᵀλ is determined, and ``multipliers``
+        holds the minimum-norm λ. Zero for a run whose constraints are independent.
 
     Examples
     --------
@@ -77,6 +81,9 @@ class Trajectory:
         self._projector = fields.get("projector")
         self.switches: list[tuple[float, str]] = list(fields.get("switches", []))
         self.geometry = fields.get("geometry")  # the model's, for animate (derive/geometry.py)
+        self.redundant_rows: np.ndarray = np.asarray(
+            fields.get("redundant_rows", np.zeros(len(self.t), dtype=np.int64)), dtype=np.int64
+        )
 
     # ------------------------------------------------------------------ derived quantities
     @property

@@ -1,0 +1,144 @@
+"""Redundant constraints at a state: which rows to keep, the minimum-norm multipliers, the report.
+
+Rows of A that depend on the others carry no information about the motion: q̈ is unique whenever M
+is positive definite on the admissible motions, but λ is determined only up to the null space of
+Aᵀ (on those rows only Aᵀλ is). pfaff keeps a maximal independent set of rows, chosen by QR with
+column pivoting of Aᵀ (rows scaled to unit length for the decision only, so that units do not
+decide), solves the motion with them, and reports the minimum Euclidean-norm λ over all rows as the
+user wrote them (no row scaling): the least-squares solution of Aᵀλ = Aᵀ_I λ_I.
+
+A run tells *persistent* redundancy (the ring closed by all N spacing rows, two wheels both
+forbidding side-slip, the Bricard linkage) from an *isolated* rank loss (a four-bar folding flat)
+by :func:`persistent`: the rank deficiency at the first consistent state must also be found at two
+nearby consistent states, reached along admissible directions; a fold regains its rank there and
+keeps the floored branch-following of :mod:`pfaff.numeric.kkt`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import scipy.linalg
+
+from pfaff.core.errors import RedundancyWarning
+from pfaff.numeric.rank import null_basis, redundant_sets
+
+REDUNDANT_DENSE = 4000  # unknowns n + m up to which a sparse model's redundant rows are found
+RANK_TOL = 1e-9  # a pivot of QR(Aᵀ) (unit rows) below this times the largest: a dependent row
+PROBE = 1e-3  # the step to the nearby states of the persistence test (times 1 + |q|)
+
+
+def independent_rows(A: np.ndarray, tol: float = RANK_TOL) -> np.ndarray | None:
+    """A maximal set of independent rows of A (ascending), or None when all rows are.
+
+    Examples
+    --------
+    >>> independent_rows(np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0]])).tolist()
+    [0, 2]
+    >>> independent_rows(np.eye(2)) is None
+    True
+    """
+    m = A.shape[0]
+    if m == 0:
+        return None
+    norms = np.sqrt((A * A).sum(axis=1))
+    if not norms.size or (norms <= 1e-12 * norms.max(initial=0.0)).any() or not norms.max() > 0:
+        return None  # a row with a zero gradient is singular, not redundant: the solve names it
+    unit = A / norms[:, None]
+    R, piv = scipy.linalg.qr(unit.T, mode="r", pivoting=True)
+    d = np.abs(np.diag(R))
+    rank = int(np.sum(d > tol * d[0])) if d.size and d[0] > 0 else 0
+    if rank == m:
+        return None
+    return np.sort(piv[:rank])
+
+
+def min_norm_multipliers(A: np.ndarray, rows: np.ndarray, lam_rows: np.ndarray) -> np.ndarray:
+    """The minimum-norm λ over all rows with Aᵀλ = A_Iᵀ λ_I, shape (m,).
+
+    Examples
+    --------
+    >>> A = np.array([[1.0, 0.0], [1.0, 0.0]])
+    >>> np.round(min_norm_multipliers(A, np.array([0]), np.array([2.0])), 12).tolist()
+    [1.0, 1.0]
+    """
+    force = A[rows].T @ lam_rows
+    return scipy.linalg.lstsq(A.T, force, cond=RANK_TOL)[0]
+
+
+def describe(names: Sequence[str], A: np.ndarray) -> str:
+    """The sets of rows that depend on one another at A, by name (for messages)."""
+    sets = redundant_sets(A)
+    return "; ".join(", ".join(f"`{names[i]}`" for i in s[:8]) for s in sets)
+
+
+def warn(names: Sequence[str], A: np.ndarray, where: str) -> None:
+    """A :class:`pfaff.RedundancyWarning` naming the dependent sets of A."""
+    m, k = A.shape[0], null_basis(A).shape[1]
+    warnings.warn(
+        f"redundant constraints {where}: rank {m - k} < {m}; {describe(names, A)} depend on one "
+        "another. The motion is determined; on these rows only Aᵀλ is, and pfaff reports the "
+        "minimum-norm multipliers (model.redundancy names the indeterminate directions)",
+        RedundancyWarning,
+        stacklevel=5,
+    )
+
+
+def persistent(
+    A0: np.ndarray,
+    rows: np.ndarray,
+    q0: np.ndarray,
+    matrix: Callable[[np.ndarray], np.ndarray],
+    residual: Callable[[np.ndarray], np.ndarray],
+    holonomic: np.ndarray,
+) -> bool:
+    """Whether the rank deficiency of A0 at q0 persists at two nearby consistent states.
+
+    The states: q0 ± PROBE (1 + |q0|) v along a fixed admissible direction v (a unit vector of
+    null(A_I)), brought back onto the position rows by Gauss–Newton on the independent rows
+    (minimum-norm steps). ``matrix(q)`` gives A, ``residual(q)`` f at q.
+    """
+    k0 = A0.shape[0] - rows.size
+    Z = scipy.linalg.null_space(A0[rows])
+    if Z.shape[1] == 0:  # no admissible motion: nothing moves, the deficiency is what it is
+        return True
+    v = Z @ np.linspace(1.0, 2.0, Z.shape[1])
+    v /= np.linalg.norm(v)
+    h = PROBE * (1.0 + np.abs(q0).max())
+    for sign in (1.0, -1.0):
+        q = q0 + sign * h * v
+        for _ in range(20):
+            A = matrix(q)
+            f = np.where(holonomic, residual(q), 0.0)
+            if not (np.isfinite(A).all() and np.isfinite(f).all()):
+                return False
+            keep = holonomic.copy()
+            step = scipy.linalg.lstsq(A[keep], f[keep], cond=RANK_TOL)[0] if keep.any() else 0.0
+            q = q - step
+            if np.abs(f).max(initial=0.0) < 1e-13 * (1.0 + np.abs(q).max()):
+                break
+        found = independent_rows(matrix(q))
+        if found is None or A0.shape[0] - found.size != k0:
+            return False
+    return True
+
+
+def dense_rows(K: object, n: int, t: float) -> np.ndarray:
+    """A of an augmented matrix K (dense or sparse) as a dense array, for the redundancy test;
+    a sparse model above :data:`REDUNDANT_DENSE` unknowns is refused (its rows are not
+    searched)."""
+    import scipy.sparse as sps
+
+    from pfaff.core.errors import ConstraintError
+
+    if not sps.issparse(K):
+        return np.asarray(K)[n:, :n]
+    if K.shape[0] > REDUNDANT_DENSE:  # type: ignore[attr-defined]
+        raise ConstraintError(
+            f"the augmented matrix is singular at t = {t:g} and the model is too large "
+            f"({K.shape[0]} unknowns) to search its constraints for redundant rows: remove the "  # type: ignore[attr-defined]
+            "dependent constraints (equations() names those that depend on one another everywhere)"
+        )
+    return sps.csr_matrix(K)[n:, :n].toarray()
