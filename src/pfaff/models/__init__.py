@@ -309,3 +309,4 @@ from pfaff.models.bodies import (  # noqa: E402, F401  (the rigid-body zoo)
     spherical_pendulum,
     torque_free_body,
 )
+from pfaff.models.diffdrive import diffdrive  # noqa: E402, F401  (a robot with a redundant row)
