@@ -24,6 +24,7 @@ def diffdrive(
     half_track: object = None,
     torques: object = None,
     inputs: bool = False,
+    redundant: bool = True,
 ) -> System:
     """A differential-drive robot on the plane: two driven wheels and a passive caster ball.
 
@@ -41,7 +42,8 @@ def diffdrive(
     lateral velocity, −ẋ sin ψ + ẏ cos ψ = 0, so the four rows have rank 3: one is redundant,
     and the redundancy subspace (the null space of Aᵀ) is spanned by (0, 0, 1, −1), equal and
     opposite lateral forces on the wheels. Where redundant constraints are refused,
-    ``equations()`` raises :class:`pfaff.ConstraintError` (issue 22).
+    ``equations()`` raises :class:`pfaff.ConstraintError` (issue 22); ``redundant=False`` writes
+    the single independent row ``no side slip`` of the axle's midpoint instead.
 
     With the forward speed v = ẋ cos ψ + ẏ sin ψ and the yaw rate ω = ψ̇ (φ̇_{L,R} = (v ∓ b ω)/r):
 
@@ -62,6 +64,9 @@ def diffdrive(
         τ_L, τ_R (default: symbols ``tau_L``, ``tau_R``).
     inputs : bool, optional
         Declare the torques as inputs (:meth:`pfaff.System.add_input`); they must be names then.
+    redundant : bool, optional
+        Both wheels' side-slip rows (default), or one ``no side slip`` row for P: three
+        independent rows, the same motion.
 
     Examples
     --------
@@ -98,6 +103,9 @@ def diffdrive(
     for side, sign, phi in (("L", 1, phi_l), ("R", -1, phi_r)):
         v = (axle + sign * b * el).diff(t)
         s.add_velocity_constraint(v.dot(ef) - r * phi.diff(t), name=f"rolling {side}")
+    if not redundant:
+        s.add_velocity_constraint(axle.diff(t).dot(el), name="no side slip")
+        return s
     for side, sign in (("L", 1), ("R", -1)):
         v = (axle + sign * b * el).diff(t)
         s.add_velocity_constraint(v.dot(el), name=f"no side slip {side}")
