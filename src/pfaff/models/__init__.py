@@ -28,6 +28,7 @@ def rolling_ring(
     incline: object = None,
     gravity: object = None,
     family: bool | None = None,
+    closed: bool = False,
 ) -> System:
     """The seed's ring of ``n`` particles rolling without slip on a line (DESIGN.md).
 
@@ -51,6 +52,17 @@ def rolling_ring(
         Declare θ as an indexed family with one particle template and one spacing template
         (constant symbolic work, structured O(N) numerics) instead of n explicit pieces. Default:
         the family form when ``n > FAMILY_FROM`` (1024). Both give identical equations.
+    closed : bool, optional
+        Also add ``spacing n``, θ_1 − θ_n − 2π/n + 2π = 0, which closes the loop (θ_{n+1} is
+        θ_1 + 2π), as an ordinary constraint after the others: n + 1 constraints on n + 1
+        coordinates. The n spacing rows are then dependent, one of them redundant: their sum is
+        the no-op 0 = 0, so the all-ones vector over the spacing rows (zero on ``no slip``) spans
+        the null space of Aᵀ, the redundancy subspace: a hoop stress, the same tension in every
+        spacing row, that moves nothing. Where redundant constraints are accepted (issue 22)
+        the motion is the open ring's, θ̈ = F/(2Mr), ẍ = F/(2M), and the friction λ_1 = -F/2 is
+        unique; the spacing multipliers are determined only up to a multiple of that vector.
+        Where they are refused, ``equations()`` raises :class:`pfaff.ConstraintError`. Default
+        False: the open ring, exactly as before.
 
     Examples
     --------
@@ -58,10 +70,12 @@ def rolling_ring(
     >>> ring = pfaff.models.rolling_ring(4, force=True)
     >>> [str(p) for p in ring.parameters]
     ['F', 'M', 'r']
+    >>> pfaff.models.rolling_ring(3, closed=True).constraint_rows()[0]
+    ('no slip', 'spacing 1', 'spacing 2', 'spacing 3')
     """
     n = _count(n, "n")
     if family or (family is None and n > FAMILY_FROM):
-        return _ring_family(n, mass, radius, force, incline, gravity)
+        return _ring_family(n, mass, radius, force, incline, gravity, closed)
     M, r = _param(mass, "M", "mass"), _param(radius, "r", "radius")
     qs = coordinates(f"x theta1:{n + 1}")
     x, th = qs[0], qs[1:]
@@ -76,6 +90,8 @@ def rolling_ring(
     ring.add_holonomic_constraint(x - r * th[0], name="no slip")
     for k in range(n - 1):
         ring.add_holonomic_constraint(th[k + 1] - th[k] - dth, name=f"spacing {k + 1}")
+    if closed:
+        _close_ring(ring, th[0], th[n - 1], n)
     if force is not None and force is not False:
         ring.add_force([_param(force, "F", "force"), 0], at=[x, 0], name="push")
     if incline is not None and incline is not False:
@@ -89,7 +105,13 @@ def rolling_ring(
 
 
 def _ring_family(
-    n: int, mass: object, radius: object, force: object, incline: object, gravity: object
+    n: int,
+    mass: object,
+    radius: object,
+    force: object,
+    incline: object,
+    gravity: object,
+    closed: bool = False,
 ) -> System:
     """:func:`rolling_ring` with θ_1 … θ_n as a family: the seed's ring in ten lines."""
     M, r, k = _param(mass, "M", "mass"), _param(radius, "r", "radius"), sp.Symbol("k", integer=True)
@@ -100,6 +122,8 @@ def _ring_family(
     ring.add_particle(M / n, pos, name="particle", over=k)
     ring.add_holonomic_constraint(x - r * th[1], name="no slip")
     ring.add_holonomic_constraint(th[k + 1] - th[k] - 2 * sp.pi / n, "spacing", over=(k, 1, n - 1))
+    if closed:  # an ordinary row after the template: `spacing n`, numbered on from it
+        _close_ring(ring, th[1], th[n], n)
     if force is not None and force is not False:
         ring.add_force([_param(force, "F", "force"), 0], at=[x, 0], name="push")
     if incline is not None and incline is not False:
@@ -107,6 +131,11 @@ def _ring_family(
         V = -(M / n) * g * (pos[0] * sp.sin(a) - pos[1] * sp.cos(a))
         ring.add_potential_energy(V, name="gravity", over=k)
     return ring
+
+
+def _close_ring(ring: System, first: sp.Expr, last: sp.Expr, n: int) -> None:
+    """The closing row ``spacing n``: θ_{n+1} − θ_n − 2π/n = 0 with θ_{n+1} = θ_1 + 2π."""
+    ring.add_holonomic_constraint(first - last - 2 * sp.pi / n + 2 * sp.pi, name=f"spacing {n}")
 
 
 def _count(value: object, name: str, low: int = 2) -> int:
@@ -282,3 +311,4 @@ from pfaff.models.bodies import (  # noqa: E402, F401  (the rigid-body zoo)
 )
 from pfaff.models.bricard import BRICARD, bricard, bricard_state  # noqa: E402, F401  (IFToMM A04)
 from pfaff.models.fourbar3d import FOURBAR3D, fourbar3d, fourbar3d_state  # noqa: E402, F401
+from pfaff.models.diffdrive import diffdrive  # noqa: E402, F401  (a robot with a redundant row)
