@@ -89,7 +89,6 @@ def test_initial_accelerations_match_reference() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="redundant constraints: issue 22", strict=False)
 def test_pfaff_follows_reference(reference: dict[str, np.ndarray]) -> None:
     """pfaff's full model through the benchmark's 10 s: the joints' paths to 1e-8 m, the energy
     to 1e-9 J, the constraints to 1e-10."""

@@ -120,19 +120,17 @@ def test_rows_vanish_on_no_slip_motion_and_one_is_redundant() -> None:
     assert abs(res[2]) > 1e-3 and res[2] == pytest.approx(res[3], abs=1e-15)
 
 
-def test_today_refused_by_rank() -> None:
-    """What issue 22 changes: the dependent pair is named."""
-    with pytest.raises(pfaff.ConstraintError, match="no side slip L`, `no side slip R"):
-        pfaff.models.diffdrive().equations()
+def test_the_side_slip_pair_is_reported() -> None:
+    """Both wheels forbid side-slip: the dependent pair is named, not refused."""
+    with pytest.warns(pfaff.RedundancyWarning, match="no side slip L`, `no side slip R"):
+        eom = pfaff.models.diffdrive().equations()
+    assert eom.redundant_sets == [["no side slip L", "no side slip R"]]
 
 
 # --------------------------------------------------------------------------- pfaff's motion
 @functools.cache
 def _eom():
     return pfaff.models.diffdrive(inputs=True).equations()
-
-
-REDUNDANT = pytest.mark.xfail(reason="redundant constraints: issue 22", strict=False)
 
 
 @functools.cache
@@ -158,7 +156,6 @@ def test_independent_rows_match_kane() -> None:
     np.testing.assert_allclose(np.asarray(lin.B, dtype=float), B, atol=1e-10)
 
 
-@REDUNDANT
 def test_accelerations_match_kane() -> None:
     model = _eom().compile(VALUES)
     for q, qd, tau in random_states(VALUES, 3, seed=7):
@@ -196,7 +193,6 @@ def _pfaff_point(eom) -> tuple[dict, list, list]:
     return op, list(eom.coordinates), [phi_l, phi_r]
 
 
-@REDUNDANT
 def test_linearize_matches_kane() -> None:
     """About straight driving at SPEED: eom.linearize with state (x, y, ψ, φ_L, φ_R, φ̇_L, φ̇_R)."""
     eom = _eom()
@@ -207,7 +203,6 @@ def test_linearize_matches_kane() -> None:
     np.testing.assert_allclose(np.asarray(lin.B, dtype=float), B, atol=1e-10)
 
 
-@REDUNDANT
 def test_compiled_linearize_matches_kane() -> None:
     eom = _eom()
     model = eom.compile(VALUES)

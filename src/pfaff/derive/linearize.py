@@ -30,9 +30,11 @@ from pfaff.numeric.linearization import (
     Linearization,
     OperatingMatrices,
     complement,
+    operating_solve,
     reduce_linear,
 )
 from pfaff.numeric.linearizer import check_steady
+from pfaff.numeric.redundant import independent_rows
 
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
@@ -75,6 +77,28 @@ class SympyOps:
         if sp.simplify(a.det(method="berkowitz")) == 0:
             raise ConstraintError(f"{what} is singular at the operating point")
         return a.LUsolve(b, iszerofunc=lambda e: sp.simplify(e) == 0).applyfunc(sp.cancel)
+
+    @staticmethod
+    def independent(a: sp.Matrix) -> list[int] | None:
+        """A maximal set of independent rows (the pivots of rref(aᵀ)), None when all are."""
+        if all(e.is_number for e in a):
+            rows = independent_rows(np.array(a.evalf(), dtype=float))
+            return None if rows is None else rows.tolist()
+        pivots = list(a.T.rref(simplify=True)[1])
+        return None if len(pivots) == a.shape[0] else pivots
+
+    @staticmethod
+    def spread(a: sp.Matrix, keep: Sequence[int], lam: sp.Matrix) -> sp.Matrix:
+        """δλ over all rows: the minimum-norm one where ``a`` is numeric (its pseudo-inverse),
+        else the kept rows' δλ and 0 on the others (only Aᵀδλ is determined there)."""
+        if all(e.is_number for e in a):
+            A = np.array(a.evalf(), dtype=float)
+            P = np.linalg.lstsq(A.T, A[list(keep)].T, rcond=1e-9)[0]
+            return sp.Matrix(P) * lam
+        out = sp.zeros(a.shape[0], lam.shape[1])
+        for k, row in enumerate(keep):
+            out[row, :] = lam[k, :]
+        return out
 
     @staticmethod
     def finish(a: sp.Matrix) -> sp.Matrix:
@@ -582,9 +606,7 @@ def linearize_at(
     vals = ev("values", qd0, [0] * n, [0] * m)
     _check_constraints(eom, vals, ev.q0, qd0)
     M, A = vals["M"], vals["A"]
-    K = ops.vstack(ops.hstack(M, -A.T), ops.hstack(A, ops.zeros(m, m)))
-    rhs = ops.vstack(-vals["E"], -vals["G"])
-    sol = ops.solve(K, rhs, "the augmented matrix [[M, -Aᵀ], [A, 0]]")
+    sol = operating_solve(ops, M, A, vals["E"], vals["G"])
     qdd0 = [sol[i, 0] for i in range(n)]
     lam0 = [sol[n + i, 0] for i in range(m)]
     scale = TOL * (1.0 + _max_abs(vals["E"]) / max(_max_abs(M), 1e-300))

@@ -46,8 +46,8 @@ def fourbar3d(**params: object) -> System:
 
     Examples
     --------
-    >>> s = fourbar3d()  # doctest: +SKIP
-    >>> len(s.coordinates), len(s.constraint_rows()[0])  # doctest: +SKIP
+    >>> s = fourbar3d()
+    >>> len(s.coordinates), len(s.constraint_rows()[0])
     (18, 20)
     """
     p = {k: _param(params.get(k), k, k) for k in FOURBAR3D}

@@ -28,11 +28,13 @@ from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
+import scipy.linalg
 
 from pfaff.core.errors import (
     ConstraintError,
     PfaffError,
 )
+from pfaff.numeric.redundant import independent_rows
 
 TOL = 1e-8  # residuals (constraints, accelerations) above this times their scale are refused
 SINGULAR = 1e-10  # a block whose smallest singular value is below this times its largest: singular
@@ -86,6 +88,18 @@ class NumpyOps:
     def finish(a: np.ndarray) -> np.ndarray:
         return np.asarray(a, dtype=float) + 0.0  # no -0.0 entries
 
+    @staticmethod
+    def independent(a: np.ndarray) -> list[int] | None:
+        """A maximal set of independent rows of ``a``, None when all are (pivoted QR)."""
+        rows = independent_rows(np.asarray(a, dtype=float))
+        return None if rows is None else rows.tolist()
+
+    @staticmethod
+    def spread(a: np.ndarray, keep: Sequence[int], lam: np.ndarray) -> np.ndarray:
+        """δλ of the kept rows to the minimum-norm δλ of all rows (same Aᵀδλ)."""
+        A = np.asarray(a, dtype=float)
+        return scipy.linalg.lstsq(A.T, A[list(keep)].T @ lam, cond=1e-9)[0]
+
 
 NUMPY = NumpyOps()
 
@@ -135,7 +149,11 @@ def reduce_linear(
     undetermined: a count that does not match the constraints, or a singular block of the
     constraint Jacobian (named by ``names``, the coordinate names).
     """
-    n, m = len(names), mats.A.shape[0]
+    n, full = len(names), mats.A
+    keep = ops.independent(full) if full.shape[0] else None
+    if keep is not None:  # redundant rows: the independent ones (pivoted QR) decide the motion
+        mats = _rows_kept(mats, keep, n, ops)
+    m = mats.A.shape[0]
     r = mats.E_u.shape[1]
     dep = complement(n, independent)
     dspd = complement(n, speeds)
@@ -182,12 +200,45 @@ def reduce_linear(
     x = range(ni + ns)
     u = range(ni + ns, ni + ns + r)
     lam = range(n, n + m)
+    C, D = ops.take(sol, lam, x), ops.take(sol, lam, u)
+    if keep is not None:  # δλ over all rows: minimum-norm (only Aᵀδλ is determined)
+        C, D = ops.spread(full, keep, C), ops.spread(full, keep, D)
     return (
         ops.finish(ops.take(rows, range(ni + ns), x)),
         ops.finish(ops.take(rows, range(ni + ns), u)),
-        ops.finish(ops.take(sol, lam, x)),
-        ops.finish(ops.take(sol, lam, u)),
+        ops.finish(C),
+        ops.finish(D),
     )
+
+
+def operating_solve(ops: Any, M: Any, A: Any, E: Any, G: Any) -> Any:
+    """[q̈; λ] at the operating point, shape (n + m, 1): K [q̈; λ] = [−E; −G] with K =
+    [[M, −Aᵀ], [A, 0]]; where rows of A depend on the others, from the independent ones (pivoted
+    QR), λ then minimum-norm over all rows."""
+    n, m = M.shape[0], A.shape[0]
+    keep = ops.independent(A) if m else None
+    Ak, Gk = (A, G) if keep is None else (ops.take(A, keep, range(n)), ops.take(G, keep, [0]))
+    mk = Ak.shape[0]
+    K = ops.vstack(ops.hstack(M, -Ak.T), ops.hstack(Ak, ops.zeros(mk, mk)))
+    sol = ops.solve(K, ops.vstack(-E, -Gk), "the augmented matrix [[M, -Aᵀ], [A, 0]]")
+    if keep is None:
+        return sol
+    lam = ops.spread(A, keep, ops.take(sol, range(n, n + mk), [0]))
+    return ops.vstack(ops.take(sol, range(n), [0]), lam)
+
+
+def _rows_kept(mats: OperatingMatrices, keep: list[int], n: int, ops: Any) -> OperatingMatrices:
+    """The operating matrices of the rows ``keep`` only."""
+    where = {row: k for k, row in enumerate(keep)}
+
+    def rows(a: Any) -> Any:
+        return ops.take(a, keep, range(a.shape[1]))
+
+    return OperatingMatrices(
+        M=mats.M, A=rows(mats.A), hol=[where[i] for i in mats.hol if i in where],
+        E_q=mats.E_q, E_qd=mats.E_qd, E_u=mats.E_u, G_q=rows(mats.G_q), G_qd=rows(mats.G_qd),
+        G_u=rows(mats.G_u), V_q=rows(mats.V_q), V_u=rows(mats.V_u),
+    )  # fmt: skip
 
 
 def ignorable(A: np.ndarray, tol: float = ZERO_COLUMN) -> list[int]:

@@ -22,6 +22,7 @@ from pfaff.numeric.linearization import (
     Linearization,
     OperatingMatrices,
     ignorable,
+    operating_solve,
     reduce_linear,
 )
 
@@ -219,9 +220,7 @@ def linearize_kernel(
     vals = kernel.values(x)
     _check_constraints(vals, hol, list(model.constraint_names), q, qd)
     M, A = vals["M"], vals["A"]
-    K = np.block([[M, -A.T], [A, np.zeros((m, m))]])
-    rhs = np.vstack((-vals["E"], -vals["G"]))
-    sol = NUMPY.solve(K, rhs, "the augmented matrix [[M, -Aᵀ], [A, 0]]")[:, 0]
+    sol = np.asarray(operating_solve(NUMPY, M, A, vals["E"], vals["G"]))[:, 0]
     qdd0, lam0 = sol[:n], sol[n:]
     scale = TOL * (1.0 + np.abs(vals["E"]).max(initial=0.0) / max(np.abs(M).max(), 1e-300))
     moving = [f"q̈ of `{names[j]}` = {qdd0[j]}" for j in spd if abs(qdd0[j]) > scale]
