@@ -2,8 +2,8 @@
 
 The reference (``bricard_reference``) is a one-degree-of-freedom model written with NumPy and
 SciPy only. The full model (``pfaff.models.bricard``) has one redundant joint row on the motion
-(Grübler: 0 degrees of freedom; Bricard: 1); until pfaff accepts redundant constraints (issue 22)
-the run through the benchmark's 10 s is expected to fail.
+(Grübler: 0 degrees of freedom; Bricard: 1), found at the first state of the run (it holds only
+on the constraint manifold) and solved with the independent rows through the benchmark's 10 s.
 """
 
 from __future__ import annotations

@@ -5,8 +5,8 @@ hand (straight-line acceleration 2τ/(r (m_c + 2 m_w + 2 I_w/r²)) under equal t
 q̈ at random states, the linearization about straight driving with its yaw-rate eigenvalue
 −m_c d v/I_P). pfaff's model writes each wheel's rolling and no-side-slip rows, one of them
 redundant: its rows are checked directly (residuals on no-slip motions, rank 3, the redundancy
-subspace), and its accelerations and linearization, which need a solver that accepts redundant
-constraints (issue 22), are marked xfail until then.
+subspace), and its accelerations and linearization (the redundant pair accepted, reported) agree
+with Kane's.
 """
 
 from __future__ import annotations

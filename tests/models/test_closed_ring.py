@@ -4,8 +4,8 @@
 θ_{k+1} − θ_k − 2π/n = 0. The n spacing rows sum to the no-op 0 = 0, so Aᵀ has the null space
 spanned by w = (0, 1, …, 1) (zero on ``no slip``): a hoop stress that moves nothing. The checks of
 the model itself evaluate the constraint expressions directly with SymPy and NumPy, never through
-pfaff's derivation or solver. The motion (θ̈ = F/(2Mr), λ_1 = −F/2) needs a solver that accepts
-redundant constraints (issue 22) and is marked xfail until then.
+pfaff's derivation or solver. The motion (θ̈ = F/(2Mr), λ_1 = −F/2) through pfaff, which accepts
+the redundant row (the family form: issue 22's family solver, xfail until it drops the row).
 """
 
 from __future__ import annotations

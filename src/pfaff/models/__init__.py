@@ -58,11 +58,11 @@ def rolling_ring(
         coordinates. The n spacing rows are then dependent, one of them redundant: their sum is
         the no-op 0 = 0, so the all-ones vector over the spacing rows (zero on ``no slip``) spans
         the null space of Aᵀ, the redundancy subspace: a hoop stress, the same tension in every
-        spacing row, that moves nothing. Where redundant constraints are accepted (issue 22)
-        the motion is the open ring's, θ̈ = F/(2Mr), ẍ = F/(2M), and the friction λ_1 = -F/2 is
-        unique; the spacing multipliers are determined only up to a multiple of that vector.
-        Where they are refused, ``equations()`` raises :class:`pfaff.ConstraintError`. Default
-        False: the open ring, exactly as before.
+        spacing row, that moves nothing. ``equations()`` reports it (a
+        :class:`pfaff.RedundancyWarning`); the motion is the open ring's, θ̈ = F/(2Mr),
+        ẍ = F/(2M), the friction λ_1 = -F/2 is unique, and the spacing multipliers are the
+        minimum-norm ones (determined only up to a multiple of that vector). Default False: the
+        open ring, exactly as before.
 
     Examples
     --------

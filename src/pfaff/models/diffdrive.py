@@ -41,9 +41,10 @@ def diffdrive(
     ``no side slip L``, ``no side slip R``: ċ·e_l = 0. Both side-slip rows say that P has no
     lateral velocity, −ẋ sin ψ + ẏ cos ψ = 0, so the four rows have rank 3: one is redundant,
     and the redundancy subspace (the null space of Aᵀ) is spanned by (0, 0, 1, −1), equal and
-    opposite lateral forces on the wheels. Where redundant constraints are refused,
-    ``equations()`` raises :class:`pfaff.ConstraintError` (issue 22); ``redundant=False`` writes
-    the single independent row ``no side slip`` of the axle's midpoint instead.
+    opposite lateral forces on the wheels. ``equations()`` reports it (a
+    :class:`pfaff.RedundancyWarning`) and the multipliers are the minimum-norm ones;
+    ``redundant=False`` writes the single independent row ``no side slip`` of the axle's midpoint
+    instead.
 
     With the forward speed v = ẋ cos ψ + ẏ sin ψ and the yaw rate ω = ψ̇ (φ̇_{L,R} = (v ∓ b ω)/r):
 
