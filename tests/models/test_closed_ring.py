@@ -5,7 +5,7 @@
 spanned by w = (0, 1, …, 1) (zero on ``no slip``): a hoop stress that moves nothing. The checks of
 the model itself evaluate the constraint expressions directly with SymPy and NumPy, never through
 pfaff's derivation or solver. The motion (θ̈ = F/(2Mr), λ_1 = −F/2) through pfaff, which accepts
-the redundant row (the family form: issue 22's family solver, xfail until it drops the row).
+the redundant row (the family form: its solver drops the closing row, known from the structure).
 """
 
 from __future__ import annotations
@@ -133,16 +133,7 @@ def _accelerations(n: int, family: bool, closed: bool) -> tuple[np.ndarray, np.n
     return np.asarray(qdd), np.asarray(lam)
 
 
-@pytest.mark.parametrize(
-    "form",
-    [
-        "explicit",
-        pytest.param(
-            "family",
-            marks=pytest.mark.xfail(reason="families: the closing row (issue 22, item 4)"),
-        ),
-    ],
-)
+@pytest.mark.parametrize("form", ["explicit", "family"])
 @pytest.mark.parametrize("n", (3, 6))
 def test_closed_ring_motion(n: int, form: str) -> None:
     """θ̈ = F/(2Mr), ẍ = F/(2M), λ_1 = −F/2; the spacing multipliers are the open ring's up to a

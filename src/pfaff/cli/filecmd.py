@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import time
+import warnings
 from typing import Any
 
 import numpy as np
 
 from pfaff.cli.argtypes import positive, whole
+from pfaff.core.errors import RedundancyWarning
 
 RUN_FLAGS = ("t_end", "method", "rtol", "atol")
 
@@ -59,15 +61,20 @@ def run_equations(args: argparse.Namespace) -> int:
     from pfaff.modelfile.printer import file_syntax, matrix_syntax
 
     mf = _load(args)
-    eom = mf.system.equations()
+    with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
+        warnings.simplefilter("ignore", RedundancyWarning)
+        eom = mf.system.equations()
     coords = list(eom.coordinates)
     lagrange = [
         f"{file_syntax(e.lhs, coords)} = {file_syntax(e.rhs, coords)}"
         for e in eom.lagrange_equations
     ]
     work = []
-    if mf.system.n <= 60:
-        for w in mf.system.work():
+    with warnings.catch_warnings():  # (reported below)
+        warnings.simplefilter("ignore", RedundancyWarning)
+        works = mf.system.work() if mf.system.n <= 60 else []
+    if works:
+        for w in works:
             does = w.does_work()
             work.append(
                 {
@@ -89,6 +96,7 @@ def run_equations(args: argparse.Namespace) -> int:
         "multipliers": [str(s) for s in eom.multipliers],
         "lagrange_equations": lagrange,
         "work": work,
+        "redundant_sets": [list(x) for x in eom.redundant_sets],
     }
     if args.json:
         print(json.dumps(rep, indent=1))
@@ -108,6 +116,7 @@ def _text(rep: dict) -> str:
         lines += ["", "b ="] + [f"  {e}" for e in rep["constraint_bias"]]
         pairs = zip(rep["multipliers"], rep["constraint_names"], strict=True)
         lines += ["", "multipliers: " + ", ".join(f"{m} ({c})" for m, c in pairs)]
+    lines += _redundancy_lines(rep["redundant_sets"])
     lines += ["", "Lagrange's equations:"] + [f"  {e}" for e in rep["lagrange_equations"]]
     if rep["work"]:
         lines += ["", "Work of the applied forces:"]
@@ -115,6 +124,27 @@ def _text(rep: dict) -> str:
             verdict = {True: "does work", False: "does no work", None: "undecided"}[w["does_work"]]
             lines.append(f"  {w['name']}: virtual power {w['virtual_power']} — {verdict}")
     return "\n".join(lines)
+
+
+def _redundancy_lines(sets: list[list[str]]) -> list[str]:
+    """The redundancy diagnosis: each set of constraints that depend on one another."""
+    if not sets:
+        return []
+    lines = ["", "Redundant constraints (the motion is determined; on these rows only Aᵀλ is, the"]
+    lines.append("multipliers reported are the minimum-norm ones):")
+    return lines + ["  " + ", ".join(x) for x in sets]
+
+
+def _run_redundancy(model: Any, traj: Any) -> list[list[str]]:
+    """The dependent sets of a run's constraints at its last state (empty when none)."""
+    from pfaff.numeric.rank import redundant_sets
+
+    if not len(traj.t) or not int(np.max(traj.redundant_rows, initial=0)):
+        return []
+    A = model.constraint_matrix(float(traj.t[-1]), traj.q[-1])
+    A = A.toarray() if hasattr(A, "toarray") else A
+    names = list(model.constraint_names)
+    return [[names[i] for i in rows] for rows in redundant_sets(A)]
 
 
 def run_model(args: argparse.Namespace) -> int:
@@ -133,12 +163,16 @@ def run_model(args: argparse.Namespace) -> int:
     if t_end is None:
         raise OptionError(f"{args.model}: no end time: give --t-end or [simulate] t_end")
     samples = settings.pop("samples", None)
-    model = mf.compile()
-    t_eval = np.linspace(0.0, t_end, samples) if samples else None
-    start = time.perf_counter()
-    traj = simulate(model, mf.q0, mf.qd0, (0.0, t_end), t_eval=t_eval, **settings)
-    wall = time.perf_counter() - start
+    with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
+        warnings.simplefilter("ignore", RedundancyWarning)
+        model = mf.compile()
+        t_eval = np.linspace(0.0, t_end, samples) if samples else None
+        start = time.perf_counter()
+        traj = simulate(model, mf.q0, mf.qd0, (0.0, t_end), t_eval=t_eval, **settings)
+        wall = time.perf_counter() - start
     rep = _run_report(mf, traj, wall)
+    rep["redundant_rows"] = int(np.max(traj.redundant_rows, initial=0))
+    rep["redundant_sets"] = _run_redundancy(model, traj)
     if args.output:
         suffix = args.output.rsplit(".", 1)[-1].lower()
         (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
@@ -191,6 +225,7 @@ def _run_text(rep: dict) -> str:
         )
     s = rep["stats"]
     lines.append("  " + ", ".join(f"{k} {v}" for k, v in s.items() if isinstance(v, int)))
+    lines += [f"  {x}" for x in _redundancy_lines(rep.get("redundant_sets", []))[1:]]
     for key in ("output", "plot", "animate"):
         if key in rep:
             lines.append(f"Wrote {rep[key]}")

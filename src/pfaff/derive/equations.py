@@ -15,7 +15,7 @@ import numpy as np
 import sympy as sp
 from sympy.physics.vector.printing import vlatex
 
-from pfaff.core.errors import PfaffError
+from pfaff.core.errors import ConstraintError, PfaffError
 from pfaff.core.lazy import LazySeq
 from pfaff.core.symbols import accel, local_q, local_qd, speed
 from pfaff.derive.blocks import Block, Local
@@ -461,6 +461,13 @@ class Derivation:
             raise PfaffError(
                 f"symbolic solve is for small systems (n + m <= {SOLVE_LIMIT}, here {n + m}); "
                 "use .compile(parameters).accelerations(t, q, qd)"
+            )
+        if self.redundant_sets:
+            named = "; ".join(", ".join(f"`{c}`" for c in x) for x in self.redundant_sets)
+            raise ConstraintError(
+                f"the symbolic solve needs independent constraints, and {named} depend on one "
+                "another: drop the dependent ones, or compile the model (its numeric solve keeps "
+                "the independent rows and reports the minimum-norm multipliers)"
             )
         M, A = sp.Matrix(self.mass_matrix), sp.Matrix(self.constraint_matrix)
         K = sp.zeros(n + m, n + m)

@@ -29,6 +29,7 @@ from pfaff.derive.equations import Derivation
 from pfaff.numeric.rank import dependent_rows, null_basis, redundant_sets
 
 NAMES_SHOWN = 8
+DENSE_ROWS = 2000  # rows up to which the sets are told apart and checked for consistency densely
 CONSISTENT = 1e-9  # a dependent row's residual on the manifold below this (relative): consistent
 
 
@@ -77,10 +78,14 @@ def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> list[list[st
     if not rows.size:
         return []
     names = eom.constraint_names
-    sets = redundant_sets(A)
-    if model is None:
-        model = build_model(eom, values, constraints_only=True)
-    bad = _inconsistent(model, tt, q, rows)
+    if sps.issparse(A) and m > DENSE_ROWS:  # one set of the rows that take part; the
+        # consistency of so large a set is left to the first state of a run (the solve checks)
+        sets, bad = [rows.tolist()], np.zeros(0, dtype=np.int64)
+    else:
+        sets = redundant_sets(A)
+        if model is None:
+            model = build_model(eom, values, constraints_only=True)
+        bad = _inconsistent(model, tt, q, rows)
     if bad.size:
         raise ConstraintError(
             f"inconsistent constraints: {dependency_names(names, bad)} cannot hold together (the "

@@ -179,6 +179,12 @@ def reduce(system: SystemSpec, independent: object, *, solutions: dict | None = 
     Eq(2*M*r**2*Derivative(theta1(t), (t, 2)), F*r)
     """
     eom = derive(system)
+    if eom.redundant_sets:
+        named = "; ".join(", ".join(f"`{c}`" for c in x) for x in eom.redundant_sets)
+        raise ConstraintError(
+            f"reduce needs independent constraints, and {named} depend on one another: drop the "
+            "dependent ones (the numeric model keeps the independent rows by itself)"
+        )
     coords = list(eom.coordinates)
     ind = [independent] if isinstance(independent, sp.Basic) else list(independent)
     bad = [str(q) for q in ind if q not in coords]

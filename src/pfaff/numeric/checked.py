@@ -15,7 +15,6 @@ from pfaff.numeric.checks import check_finite
 from pfaff.numeric.general import augmentation
 from pfaff.numeric.inertia import inertia_test, undetermined_message
 from pfaff.numeric.linearizer import linearize_model
-from pfaff.numeric.rank import null_basis
 from pfaff.numeric.redundant import dense_rows, independent_rows, persistent, warn
 
 if TYPE_CHECKING:
@@ -222,31 +221,3 @@ class CheckedGeneral:
             return None
         warn(self.constraint_names, A, f"at the first state (t = {t:g})")
         return rows
-
-    def redundancy(self, t: float, q: object, qd: object) -> tuple[list[str], np.ndarray]:
-        """The constraints and the indeterminate directions of their multipliers at a state.
-
-        Returns
-        -------
-        names : list of str
-            The constraint names, in row order.
-        basis : ndarray, shape (m, k)
-            An orthonormal basis of the null space of Aᵀ: λ + basis @ c gives the same
-            generalized constraint force Aᵀλ for every c, so on these directions only Aᵀλ is
-            determined (pfaff reports the minimum-norm λ, orthogonal to them). k = 0: none.
-
-        Examples
-        --------
-        >>> import numpy as np, pfaff
-        >>> ring = pfaff.models.rolling_ring(4, force=True, closed=True)
-        >>> import warnings; warnings.simplefilter("ignore")
-        >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
-        >>> q, qd = pfaff.models.ring_state(4, radius=0.5, theta=0.3)
-        >>> names, basis = model.redundancy(0.0, q, qd)
-        >>> basis.shape, np.round(np.abs(basis[:, 0]) * 2, 6).tolist()  # the hoop stress
-        ((5, 1), [0.0, 1.0, 1.0, 1.0, 1.0])
-        """
-        t, q, qd = self._state(t, q, qd)
-        A = np.asarray(self.constraint_matrix(t, q).todense() if sps.issparse(
-            self.constraint_matrix(t, q)) else self.constraint_matrix(t, q))  # fmt: skip
-        return list(self.constraint_names), null_basis(A)

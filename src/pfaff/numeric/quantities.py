@@ -9,9 +9,11 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import scipy.sparse as sps
 
 from pfaff.numeric.checks import projection_options, real_vector
 from pfaff.numeric.projection import newton_projection
+from pfaff.numeric.rank import DENSE_LIMIT, null_basis, sparse_null_basis
 from pfaff.numeric.streams import add_product, take
 
 
@@ -102,3 +104,33 @@ class Quantities:
         return newton_projection(
             lambda q_, qd_: self.linearize_constraints(t, q_, qd_, tol), q, qd, max_iter=max_iter
         )
+
+    def redundancy(self, t: float, q: object, qd: object) -> tuple[list[str], np.ndarray]:
+        """The constraints and the indeterminate directions of their multipliers at a state.
+
+        Returns
+        -------
+        names : list of str
+            The constraint names, in row order.
+        basis : ndarray, shape (m, k)
+            An orthonormal basis of the null space of Aᵀ: λ + basis @ c gives the same
+            generalized constraint force Aᵀλ for every c, so on these directions only Aᵀλ is
+            determined (pfaff reports the minimum-norm λ, orthogonal to them). k = 0: none.
+
+        Examples
+        --------
+        >>> import warnings, numpy as np, pfaff
+        >>> warnings.simplefilter("ignore", pfaff.RedundancyWarning)
+        >>> ring = pfaff.models.rolling_ring(4, force=True, closed=True)
+        >>> model = ring.equations().compile({"M": 1, "r": 0.5, "F": 2})
+        >>> q, qd = pfaff.models.ring_state(4, radius=0.5, theta=0.3)
+        >>> names, basis = model.redundancy(0.0, q, qd)
+        >>> basis.shape, np.round(np.abs(basis[:, 0]) * 2, 6).tolist()  # the hoop stress
+        ((5, 1), [0.0, 1.0, 1.0, 1.0, 1.0])
+        """
+        t, q, qd = self._state(t, q, qd)
+        A = self.constraint_matrix(t, q)
+        names = list(self.constraint_names)
+        if sps.issparse(A) and A.shape[0] > DENSE_LIMIT:
+            return names, sparse_null_basis(sps.csr_matrix(A))
+        return names, null_basis(A)

@@ -95,6 +95,11 @@ def _sparse_null_basis(A: sps.csr_matrix, seed: int) -> np.ndarray:
         k = min(m, 2 * k)
 
 
+def sparse_null_basis(A: sps.csr_matrix, seed: int = 20261124) -> np.ndarray:
+    """An orthonormal basis of null(Aᵀ) of a large sparse A, shape (m, m - rank)."""
+    return _sparse_null_basis(A, seed)
+
+
 def null_basis(A: np.ndarray | sps.spmatrix) -> np.ndarray:
     """An orthonormal basis of null(Aᵀ), shape (m, m - rank) (dense SVD).
 

@@ -21,12 +21,16 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
 
 from pfaff.core.errors import ModelError
 from pfaff.numeric.base import StreamModel
+from pfaff.numeric.kkt import KKTSystem
 from pfaff.numeric.parts import ConStreams, DynStreams
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.solvers import check, family_solver, names
+from pfaff.numeric.streams import Index
 from pfaff.numeric.triangular import TriangularSolver, triangular_plan
 
 SOLVERS = names("family")
@@ -96,21 +100,66 @@ class StructuredModel(StreamModel):
         when the model is built and again when it is unpickled (a pickle carries no N-long
         arrays)."""
         plan = triangular_plan(self) if solver in (None, "triangular") else None
+        drop, view = None, self
+        if plan is None and solver in (None, "triangular"):
+            drop, view, plan = _dropped_plan(self)
         if solver == "triangular" and plan is None:
             raise ModelError("the constraints have no square banded triangular structure")
         set_ = object.__setattr__
         set_(self, "_plan", plan)
-        set_(self, "_solver", family_solver(self, plan))
+        set_(self, "_drop", drop)
+        set_(self, "_view", view)
+        set_(self, "_solver", family_solver(view, plan))
         set_(self, "_pattern", KKTPattern(self) if plan is None else None)
         set_(self, "solver", self._solver.name)
 
     def _fresh_run_parts(self) -> None:
         super()._fresh_run_parts()
         if self.solver != "none":
-            self.__dict__["_solver"] = family_solver(self, self._plan)
+            self.__dict__["_solver"] = family_solver(self._view, self._plan)
 
     def _unpickled(self) -> set[str]:
-        return super()._unpickled() | {"_plan", "_solver"}
+        return super()._unpickled() | {"_plan", "_solver", "_drop", "_view"}
+
+    # ------------------------------------------------------------------ a dropped row
+    def _solve(
+        self,
+        t: float,
+        q: np.ndarray,
+        qd: np.ndarray,
+        alpha: float = 0.0,
+        beta: float = 0.0,
+        out: np.ndarray | None = None,
+        multipliers: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The base solve; where the structure drops a redundant row (the closed ring's last
+        spacing), the others' solve, λ = 0 on it and then the minimum-norm λ over all rows."""
+        if self.__dict__.get("_drop") is None:
+            return super()._solve(t, q, qd, alpha, beta, out, multipliers)
+        view, d = self._view, self._drop
+        mvals, f = self._dynamics(t, q, qd)
+        avals, bias = self._accel_constraints(t, q, qd)
+        keep = [i for i in range(len(self.con)) if i != d]
+        c = -view._rows_vector([bias[i] for i in keep])
+        if alpha or beta:
+            fr, g = self.residual(t, q, qd)
+            c = c - 2 * alpha * g[:-1] - beta**2 * fr[:-1]
+        self.stats["kkt_solves"] += 1
+        qdd, lam = self._solver.solve(
+            KKTSystem(f, c, mvals=mvals, avals=[avals[i] for i in keep]), out=out,
+            multipliers=multipliers,
+        )  # fmt: skip
+        if not multipliers or lam is None:
+            return qdd, lam
+        return qdd, _minimum_norm(self._jacobian(avals), np.append(lam, 0.0), self.p)
+
+    def evaluate_states(
+        self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        out = super().evaluate_states(t, q, qd)
+        if self.__dict__.get("_drop") is not None:  # one row dependent on the others throughout
+            out["redundant_rows"] = np.ones(len(t), dtype=np.int64)
+        return out
 
     def _restored(self) -> None:
         super()._restored()
@@ -156,3 +205,44 @@ class StructuredModel(StreamModel):
         the parameter values are given (``compile``).
         """
         self._state(t, q, qd)
+
+
+def _dropped_plan(model: StructuredModel) -> tuple[int | None, StructuredModel, object]:
+    """(block index, view, plan) where leaving out the last constraint row, a single row of its
+    own (the closed ring's ``spacing n``), gives the triangular structure; else (None, model,
+    None). The row must depend on the others (checked at a random state)."""
+    last = [
+        i for i, part in enumerate(model.con)
+        if isinstance(part.rows, Index) and part.rows.count == 1 and part.rows.start == model.m - 1
+    ]  # fmt: skip
+    if not last:
+        return None, model, None
+    view = object.__new__(type(model))
+    view.__dict__.update(model.__dict__)
+    view.__dict__.update(con=[c for i, c in enumerate(model.con) if i != last[0]], m=model.m - 1)
+    plan = triangular_plan(view)
+    if plan is None:
+        return None, model, None
+    rng = np.random.default_rng(20261127)
+    q = rng.uniform(-1.3, 1.3, model.n)
+    A = model._jacobian(model._accel_constraints(0.3, q, np.zeros(model.n))[0])
+    w = _null_vector(A, model.p)
+    if not np.isfinite(w).all() or np.abs(A.T @ w).max() > 1e-9 * (1 + abs(A).max()):
+        return None, model, None  # the row is independent: not a redundant closure
+    return last[0], view, plan
+
+
+def _null_vector(A: sps.spmatrix, p: int) -> np.ndarray:
+    """w with Aᵀw = 0 and w_last = 1, shape (m,): the other rows restricted to the family
+    columns are the square triangular A_L of the plan, so A_Lᵀ w_s = −a_L (one sparse
+    triangular solve, exact to rounding); the p ordinary columns then hold (the row is
+    redundant)."""
+    A = sps.csr_matrix(A)
+    As, a = A[:-1, p:], A[-1, p:]
+    return np.append(spla.spsolve(sps.csc_matrix(As.T), -a.toarray().ravel()), 1.0)
+
+
+def _minimum_norm(A: sps.spmatrix, lam: np.ndarray, p: int) -> np.ndarray:
+    """λ minus its component along the null vector of Aᵀ: the minimum-norm λ (same Aᵀλ)."""
+    w = _null_vector(A, p)
+    return lam - w * (w @ lam) / (w @ w)
