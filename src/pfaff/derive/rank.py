@@ -26,10 +26,9 @@ from pfaff.core.errors import ConstraintError, RedundancyWarning
 from pfaff.derive.compile import build_model
 from pfaff.derive.compile_family import structured_model
 from pfaff.derive.equations import Derivation
-from pfaff.numeric.rank import dependent_rows, null_basis, redundant_sets
+from pfaff.numeric.rank import DENSE_LIMIT, dependent_rows, null_basis, redundant_sets
 
 NAMES_SHOWN = 8
-DENSE_ROWS = 2000  # rows up to which the sets are told apart and checked for consistency densely
 CONSISTENT = 1e-9  # a dependent row's residual on the manifold below this (relative): consistent
 
 
@@ -78,7 +77,9 @@ def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> list[list[st
     if not rows.size:
         return []
     names = eom.constraint_names
-    if sps.issparse(A) and m > DENSE_ROWS:  # one set of the rows that take part; the
+    if (
+        sps.issparse(A) and m > DENSE_LIMIT
+    ):  # (the sets told apart, checked densely below)  # one set of the rows that take part; the
         # consistency of so large a set is left to the first state of a run (the solve checks)
         sets, bad = [rows.tolist()], np.zeros(0, dtype=np.int64)
     else:
@@ -109,15 +110,15 @@ def _inconsistent(model: object, t: float, q: np.ndarray, rows: np.ndarray) -> n
     hol = np.asarray(model.holonomic, dtype=bool)  # type: ignore[attr-defined]
     qd = np.zeros(model.n)  # type: ignore[attr-defined]
     with np.errstate(all="ignore"):
-        for _ in range(30):  # Gauss–Newton on the independent position rows, minimum-norm steps
+        for _ in range(12):  # Gauss–Newton on the position rows, minimum-norm steps
             A = _dense(model.constraint_matrix(t, q))  # type: ignore[attr-defined]
             f = np.where(hol, model.residual(t, q, qd)[0], 0.0)  # type: ignore[attr-defined]
             if not np.all(np.isfinite(A)) or not np.all(np.isfinite(f)):
                 return np.zeros(0, dtype=np.int64)
-            step = scipy.linalg.lstsq(A[hol], f[hol], cond=1e-10)[0] if hol.any() else 0.0
-            q = q - step
-            if hol.any() and np.abs(step).max() < 1e-14 * (1 + np.abs(q).max()):
+            if not hol.any() or np.abs(f).max() < 1e-14 * (1 + np.abs(q).max()):
                 break
+            step = scipy.linalg.lstsq(A[hol], f[hol], cond=1e-10, lapack_driver="gelsy")[0]
+            q = q - step
         A = _dense(model.constraint_matrix(t, q))  # type: ignore[attr-defined]
         f, g = model.residual(t, q, qd)  # type: ignore[attr-defined]
     scale = 1.0 + np.abs(A).max() * (1 + np.abs(q).max())
