@@ -14,7 +14,8 @@ from pfaff.mechanics.attitude import (
     EulerAngles,
     PlanarAngle,
     Quaternion,
+    Rotation,
     dcm_from,
 )
 
-__all__ = ["MRP", "Attitude", "EulerAngles", "PlanarAngle", "Quaternion", "dcm_from"]
+__all__ = ["MRP", "Attitude", "EulerAngles", "PlanarAngle", "Quaternion", "Rotation", "dcm_from"]

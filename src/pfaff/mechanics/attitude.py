@@ -1,4 +1,5 @@
-"""Attitude coordinates of a rigid body: Euler angles, Euler parameters, MRPs, a planar angle.
+"""Attitude coordinates of a rigid body: Euler angles, Euler parameters, MRPs, a planar angle, or
+any rotation matrix of the system's coordinates (:class:`Rotation`).
 
 Each set maps its coordinates q(t) to the direction cosine matrix C with ``r_inertial = C r_body``
 and to the body components of the angular velocity ω, linear in q̇, such that
@@ -22,9 +23,12 @@ from numpy.typing import ArrayLike, NDArray
 from pfaff.core.errors import ModelError, ModelTypeError, StateError
 from pfaff.core.symbols import is_coordinate_like, t
 
-__all__ = ["MRP", "Attitude", "EulerAngles", "PlanarAngle", "Quaternion", "dcm_from"]
+__all__ = [
+    "MRP", "Attitude", "EulerAngles", "PlanarAngle", "Quaternion", "Rotation", "dcm_from",
+]  # fmt: skip
 
 SEQUENCES = ("121", "123", "131", "132", "212", "213", "231", "232", "312", "313", "321", "323")
+TIDY_OPS = 600  # a Rotation's ω entries with more operations are left unsimplified
 SINGULAR_TOL = 1e-10  # |singularity| below this: the kinematic matrix is treated as singular
 
 
@@ -404,6 +408,105 @@ class PlanarAngle(Attitude):
         return w[-1:].copy()
 
 
+def _tidy(e: sp.Expr) -> sp.Expr:
+    """Fu's trigonometric rules (sin² + cos², angle sums) on an entry small enough for them."""
+    return sp.fu(e) if sp.count_ops(e) <= TIDY_OPS else e
+
+
+class Rotation(Attitude):
+    """Any rotation matrix C(q, t) of the system's coordinates: r_inertial = C r_body.
+
+    The body angular velocity comes from C itself, [ω×] = Cᵀ Ċ, so ω is linear in q̇ (plus
+    Cᵀ ∂C/∂t when C depends on t explicitly). Unlike the coordinate sets, several Rotation bodies
+    may share coordinates (a kinematic chain: link 2's C uses q1 and q2); ``add_rigid_body``
+    checks that the coordinates are the system's and that C is orthogonal with det C = 1 (at a
+    random state). A ``sympy.physics.vector.ReferenceFrame`` B given as an attitude becomes
+    ``Rotation(N.dcm(B))`` for the system's inertial frame N. There are no numeric conversions
+    (``from_dcm``, ``rates``): the coordinates are the user's joint angles, not an attitude set.
+
+    Parameters
+    ----------
+    dcm : Matrix, shape (3, 3)
+        C, in coordinates (functions of t made with ``pfaff.coordinates``), t and parameters;
+        no coordinate rates.
+    source : str, optional
+        What C came from, for messages.
+
+    Examples
+    --------
+    >>> import sympy as sp, pfaff
+    >>> q1, q2 = pfaff.coordinates("q1 q2")
+    >>> rz = sp.Matrix([[sp.cos(q1), -sp.sin(q1), 0], [sp.sin(q1), sp.cos(q1), 0], [0, 0, 1]])
+    >>> ry = sp.Matrix([[sp.cos(q2), 0, sp.sin(q2)], [0, 1, 0], [-sp.sin(q2), 0, sp.cos(q2)]])
+    >>> r = Rotation(rz * ry)
+    >>> r.coordinates
+    (q1(t), q2(t))
+    >>> r.angular_velocity.T
+    Matrix([[-sin(q2(t))*Derivative(q1(t), t), Derivative(q2(t), t), cos(q2(t))*Derivative(q1(t), t)]])
+    """
+
+    kind = "rotation"
+
+    def __init__(self, dcm: object, source: str = "") -> None:
+        if not isinstance(dcm, sp.MatrixBase | list | tuple | np.ndarray):
+            raise ModelTypeError(
+                f"`dcm` of Rotation must be a 3×3 SymPy Matrix, got {type(dcm).__name__}"
+            )
+        c = sp.Matrix(dcm)
+        if c.shape != (3, 3):
+            raise ModelError(f"`dcm` of Rotation must be 3×3, got shape {c.shape}")
+        c = c.applyfunc(sp.sympify)
+        if any(e.atoms(sp.Derivative) for e in c):
+            raise ModelError("`dcm` of Rotation must not contain coordinate rates (Derivative)")
+        self.source = source
+        self.dcm = sp.ImmutableMatrix(c)
+        funcs = {f for e in c for f in e.atoms(sp.core.function.AppliedUndef)}
+        bad = sorted(str(f) for f in funcs if not is_coordinate_like(f))
+        if bad:
+            raise ModelTypeError(
+                f"`dcm` of Rotation: {', '.join(bad)} is not a coordinate (a function of t alone)"
+            )
+        self.coordinates = tuple(sorted(funcs, key=str))
+        self.size = len(self.coordinates)
+        self.rates_symbols = tuple(sp.Derivative(q, t) for q in self.coordinates)
+        self.angular_velocity = self._omega_of(c)
+
+    def _omega_of(self, c: sp.Matrix) -> sp.Matrix:
+        """ω = vee(Cᵀ Ċ), one q̇ at a time (plus ∂/∂t), each coefficient trig-simplified."""
+        parts = [
+            (c.diff(q), qd) for q, qd in zip(self.coordinates, self.rates_symbols, strict=True)
+        ]
+        dummies = {q: sp.Dummy(str(q)) for q in self.coordinates}
+        fixed = c.xreplace(dummies)
+        if fixed.has(t):  # ∂C/∂t with the coordinates held fixed
+            back = {d: q for q, d in dummies.items()}
+            parts.append((fixed.diff(t).xreplace(back), sp.S.One))
+        w = sp.zeros(3, 1)
+        for dc, rate in parts:
+            skew = c.T * dc
+            vee = (skew[2, 1] - skew[1, 2], skew[0, 2] - skew[2, 0], skew[1, 0] - skew[0, 1])
+            w += sp.Matrix([_tidy(sp.expand(e / 2)) for e in vee]) * rate
+        return w
+
+    def __repr__(self) -> str:
+        return f"Rotation({self.source})" if self.source else f"Rotation({self.coordinates})"
+
+    def _refuse(self, what: str) -> None:
+        raise ModelError(
+            f"Rotation has no `{what}`: its coordinates are the user's (joint angles), not an "
+            "attitude set; `from_dcm` and `rates` exist for EulerAngles, Quaternion, MRP and "
+            "PlanarAngle only"
+        )
+
+    def from_dcm(self, dcm: ArrayLike) -> NDArray[np.float64]:
+        """Refused: a Rotation has no inverse map (see the class docstring)."""
+        self._refuse("from_dcm")
+
+    def rates(self, values: ArrayLike, omega_body: ArrayLike) -> NDArray[np.float64]:
+        """Refused: a Rotation has no inverse map (see the class docstring)."""
+        self._refuse("rates")
+
+
 def dcm_from(attitude: Attitude, values: ArrayLike) -> NDArray[np.float64]:
     """The numeric C (3, 3) of an attitude set at coordinate ``values``.
 
@@ -416,10 +519,10 @@ def dcm_from(attitude: Attitude, values: ArrayLike) -> NDArray[np.float64]:
            [ 1.,  0.,  0.],
            [ 0.,  0.,  1.]])
     """
-    if not isinstance(attitude, Attitude):
+    if not isinstance(attitude, Attitude) or isinstance(attitude, Rotation):
         raise ModelTypeError(
             "`attitude` must be an EulerAngles, Quaternion, MRP or PlanarAngle, got "
-            f"{type(attitude).__name__}"
+            f"{type(attitude).__name__} (a Rotation's C is model.geometry.bodies(q)[1])"
         )
     q = attitude._values(values)
     return np.asarray(attitude._numeric[0](q), dtype=float)

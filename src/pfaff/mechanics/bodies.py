@@ -17,12 +17,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from pfaff.core.errors import BodyInertiaError, ModelError, ModelTypeError
 from pfaff.core.symbols import as_expr, t
 from pfaff.mechanics.attitude import Attitude, PlanarAngle
 
 TORQUE_FRAMES = ("inertial", "body")
+ROTATION_TOL = 1e-9  # CᵀC = I and det C = 1 to this, at a random state
 
 
 @dataclass(eq=False)
@@ -175,6 +177,27 @@ def check_inertia(mat: np.ndarray, what: str, planar: bool = False) -> None:
         raise BodyInertiaError(
             f"{what} violates the triangle inequality of principal moments: "
             f"{c:g} > {a:g} + {b:g} (no rigid body has these)"
+        )
+
+
+def check_rotation(dcm: sp.Matrix, what: str, seed: int = 20231) -> None:
+    """Refuse a C that is not a rotation: CᵀC = I and det C = 1 (to ``ROTATION_TOL``) at a random
+    state (coordinates, t and parameters drawn from a fixed seed)."""
+    rng = np.random.default_rng(seed)
+    funcs = sorted({f for e in dcm for f in e.atoms(AppliedUndef)}, key=str)
+    values: dict = {f: sp.Float(rng.uniform(-np.pi, np.pi)) for f in funcs}
+    c = dcm.xreplace(values)
+    symbols = sorted(set().union(*(e.free_symbols for e in c)), key=str)
+    c = c.xreplace({s: sp.Float(rng.uniform(0.5, 1.5)) for s in symbols})
+    try:
+        num = np.array(c.evalf().tolist(), dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ModelError(f"{what}: C does not evaluate to numbers at a random state ({e})") from e
+    err = max(np.abs(num.T @ num - np.eye(3)).max(), abs(np.linalg.det(num) - 1))
+    if not err <= ROTATION_TOL:
+        raise ModelError(
+            f"{what} is not a rotation matrix: at a random state |CᵀC − I| or |det C − 1| is "
+            f"{err:.3g} > {ROTATION_TOL:g}; C must map body to inertial components, r_N = C r_B"
         )
 
 

@@ -9,11 +9,12 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import sympy as sp
+from sympy.physics.vector import ReferenceFrame
 
 from pfaff.core.errors import ModelError, ModelTypeError
 from pfaff.core.symbols import as_expr, t
-from pfaff.mechanics.attitude import Attitude, PlanarAngle
-from pfaff.mechanics.bodies import Body, between, inertia_matrix, torque_exprs
+from pfaff.mechanics.attitude import Attitude, PlanarAngle, Rotation
+from pfaff.mechanics.bodies import Body, between, check_rotation, inertia_matrix, torque_exprs
 
 if TYPE_CHECKING:
     from pfaff.mechanics.system import SystemSpec
@@ -30,7 +31,7 @@ class ElementsMixin:
         mass: object,
         inertia: object,
         position: object,
-        attitude: Attitude,
+        attitude: Attitude | ReferenceFrame,
         name: str | None = None,
         *,
         frame: object = None,
@@ -47,11 +48,18 @@ class ElementsMixin:
             moments must satisfy the triangle inequality (equality allowed: thin disks, plates).
         position : sequence of 2 or 3 Expr, Matrix or Vector
             Inertial components of the mass centre, functions of q and t.
-        attitude : EulerAngles, Quaternion, MRP or PlanarAngle
-            Made from coordinates of this system, each used by one attitude set only. A
-            quaternion adds the holonomic constraint ``"<name> unit norm"``: β·β − 1 = 0.
+        attitude : EulerAngles, Quaternion, MRP, PlanarAngle, Rotation or ReferenceFrame
+            Made from coordinates of this system. A coordinate set (EulerAngles, Quaternion,
+            MRP, PlanarAngle) uses coordinates no other body's attitude uses. A quaternion adds
+            the holonomic constraint ``"<name> unit norm"``: β·β − 1 = 0. A
+            :class:`~pfaff.attitude.Rotation` C(q, t), or a ``sympy.physics.vector`` frame B
+            (C = N.dcm(B) for the inertial frame N of ``frame=`` or ``System(..., frame=N)``),
+            may share coordinates with other Rotation bodies (a kinematic chain); C must be a
+            rotation (CᵀC = I, det C = 1, checked at a random state).
         name : str, optional
             ``body0``, ``body1``, … in order when omitted.
+        frame : ReferenceFrame, optional
+            The inertial frame of a Vector ``position`` and of a ReferenceFrame ``attitude``.
 
         Returns
         -------
@@ -66,29 +74,16 @@ class ElementsMixin:
         >>> s.constraint_rows()[0]
         ('body0 unit norm',)
         """
-        if not isinstance(attitude, Attitude):
-            raise ModelTypeError(
-                "`attitude` must be a pfaff.attitude set (EulerAngles, Quaternion, MRP or "
-                f"PlanarAngle), got {type(attitude).__name__}"
-            )
         if name is not None and not isinstance(name, str):
             raise ModelTypeError(f"`name` must be a string, got {name!r:.60}")
         label = name or f"body{len(self.bodies)}"
         if any(b.name == label for b in self.bodies):
             raise ModelError(f"a body named `{label}` exists already")
         what = f"body `{label}`"
-        for q in attitude.coordinates:
-            if q not in self._index:
-                raise ModelError(
-                    f"attitude of {what}: `{q}` is not a coordinate of this system "
-                    f"(coordinates: {', '.join(map(str, self.coordinates))})"
-                )
-            other = next((b for b in self.bodies if q in b.attitude.coordinates), None)
-            if other is not None:
-                raise ModelError(
-                    f"attitude of {what}: the coordinate `{q}` is already an attitude coordinate "
-                    f"of body `{other.name}`; each body needs its own"
-                )
+        attitude = self._attitude(attitude, frame, what)
+        self._check_attitude_coordinates(attitude, what)
+        if isinstance(attitude, Rotation):
+            check_rotation(attitude.dcm, f"attitude of {what}")
         m = as_expr(mass, f"mass of {what}")
         r = sp.Matrix(self._vector(position, f"position of {what}", frame))
         if r.rows == 2 and not isinstance(attitude, PlanarAngle):
@@ -109,6 +104,56 @@ class ElementsMixin:
             self.add_holonomic_constraint(attitude.constraint, name=body.constraint)
         self.bodies.append(body)
         return body
+
+    def _attitude(self: SystemSpec, attitude: object, frame: object, what: str) -> Attitude:
+        """The attitude set of a body; a ReferenceFrame B becomes Rotation(N.dcm(B))."""
+        if isinstance(attitude, ReferenceFrame):
+            inertial = frame if frame is not None else self.frame
+            if inertial is None:
+                raise ModelError(
+                    f"attitude of {what} is the ReferenceFrame {attitude}: give the inertial "
+                    "frame N as pfaff.System(..., frame=N) (or add_rigid_body(..., frame=N))"
+                )
+            try:
+                dcm = inertial.dcm(attitude)
+            except ValueError as e:
+                raise ModelError(
+                    f"attitude of {what}: the frame {attitude} is not oriented relative to the "
+                    f"inertial frame {inertial} ({e})"
+                ) from e
+            return Rotation(dcm, source=f"{inertial}.dcm({attitude})")
+        if not isinstance(attitude, Attitude):
+            raise ModelTypeError(
+                "`attitude` must be a pfaff.attitude set (EulerAngles, Quaternion, MRP, "
+                "PlanarAngle, Rotation) or a sympy.physics.vector.ReferenceFrame, got "
+                f"{type(attitude).__name__}"
+            )
+        return attitude
+
+    def _check_attitude_coordinates(self: SystemSpec, attitude: Attitude, what: str) -> None:
+        """Coordinates of this system; shared between bodies only by Rotation attitudes."""
+        shares = isinstance(attitude, Rotation)
+        for q in attitude.coordinates:
+            if q not in self._index:
+                raise ModelError(
+                    f"attitude of {what}: `{q}` is not a coordinate of this system "
+                    f"(coordinates: {', '.join(map(str, self.coordinates))})"
+                )
+            other = next(
+                (
+                    b
+                    for b in self.bodies
+                    if q in b.attitude.coordinates
+                    and not (shares and isinstance(b.attitude, Rotation))
+                ),
+                None,
+            )
+            if other is not None:
+                raise ModelError(
+                    f"attitude of {what}: the coordinate `{q}` is already an attitude coordinate "
+                    f"of body `{other.name}`; each body needs its own (only Rotation and "
+                    "ReferenceFrame attitudes may share coordinates)"
+                )
 
     def add_torque(
         self: SystemSpec,
