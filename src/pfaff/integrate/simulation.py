@@ -546,7 +546,8 @@ class _Run:
                         done = st
                         switched = self._event(st) if events else None
                         state = done.state() if switched is None else switched
-                        self._record(done.t, *state, self.project_steps, work + step_work)
+                        if not (roots and roots[-1][0] == done.t):  # (a root at the step's end)
+                            self._record(done.t, *state, self.project_steps, work + step_work)
                     else:
                         end = roots[-1][0] if stop else st.t
                         j = int(np.searchsorted(te, end, side="right"))
