@@ -25,6 +25,7 @@ from pfaff.core.errors import (
     SimulationError,
     StateError,
 )
+from pfaff.core.events import Event, EventRecord
 from pfaff.core.symbols import coordinates, t
 from pfaff.derive.work import ForceWork
 from pfaff.integrate.initial import consistent_state
@@ -45,6 +46,8 @@ __all__ = [
     "ConstraintError",
     "EquationsOfMotion",
     "EulerAngles",
+    "Event",
+    "EventRecord",
     "ForceWork",
     "InertiaError",
     "Linearization",

@@ -223,6 +223,13 @@ def _run_text(rep: dict) -> str:
             f"{rep['energy_balance_error']:.2e}, max constraint residual "
             f"{rep['max_constraint_residual']:.2e}"
         )
+    if rep.get("events"):
+        lines.append(
+            "  events: "
+            + ", ".join(f"{e['name']} at t = {e['t']:.10g}" for e in rep["events"][:10])
+        )
+        if len(rep["events"]) > 10:
+            lines[-1] += f", ... ({len(rep['events'])} in all)"
     s = rep["stats"]
     lines.append("  " + ", ".join(f"{k} {v}" for k, v in s.items() if isinstance(v, int)))
     lines += [f"  {x}" for x in _redundancy_lines(rep.get("redundant_sets", []))[1:]]

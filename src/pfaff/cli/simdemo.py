@@ -41,6 +41,9 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
             if v is not None
         },
         "wall_time_s": wall,
+        "events": [
+            {"name": e.name, "t": float(e.t), "kind": e.kind} for e in getattr(traj, "events", [])
+        ],
     }
 
 

@@ -23,6 +23,7 @@ from pfaff.core.errors import ParameterError
 from pfaff.core.symbols import local_qd
 from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
+from pfaff.derive.events import compile_events
 from pfaff.derive.fused import build_fused
 from pfaff.derive.geometry import build_geometry
 from pfaff.derive.linearize import linearizer_for
@@ -219,7 +220,7 @@ def build_model(
 ) -> NumericModel:
     """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values,
     in one place: the stream parts, the fused kernel of a small system (checked by the model
-    once, :mod:`pfaff.numeric.general`), the attitude sets, the geometry, the linearization
+    once, :mod:`pfaff.numeric.general`), the attitude sets, the events, the geometry, the linearization
     factory and the way to other parameter values. ``evaluator``: see
     :mod:`pfaff.numeric.evaluator`.
     """
@@ -272,6 +273,7 @@ def build_model(
         evaluator=evaluator,
         inputs=inputs,
         attitudes=attitude_sets(eom),
+        events=compile_events(eom, params, values),  # System.add_event, found by simulate
         geometry=None if constraints_only else build_geometry(eom, values),  # animations
         linearizer=None if constraints_only else linearizer_for(eom),  # NumericModel.linearize
         restream=Restream(eom, params, constraints_only),  # for model.with_parameters

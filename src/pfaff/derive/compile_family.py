@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from pfaff.core.errors import ModelError
 from pfaff.core.lazy import NumberedNames
 from pfaff.derive.compile import (
     Restream,
@@ -48,6 +49,12 @@ def structured_model(
     ``solver`` is ``None`` (the triangular solver where the structure allows, else sparse),
     ``"triangular"``, ``"sparse"``, or ``"none"`` (kernels only: residuals and matrices).
     """
+    if getattr(eom.system, "events", None):
+        raise ModelError(
+            "events (System.add_event) are not supported by models with families yet: compile "
+            "the system without families, or pass the events to pfaff.simulate(events=[pfaff."
+            "Event(g, ...)]) as functions g(t, q, qd)"
+        )
     params = tuple(eom.parameters)
     dyn = [dyn_streams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"]
     con = [con_streams(b, params, values) for b in eom.blocks if b.local.kind != "dynamics"]

@@ -26,7 +26,8 @@ from pfaff.core.errors import (
     raised_in_generated_code,
     undefined_at,
 )
-from pfaff.integrate.events import SINGULAR, AttitudeEvents
+from pfaff.core.events import Event, EventRecord
+from pfaff.integrate.events import SINGULAR, AttitudeEvents, UserEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
@@ -230,6 +231,7 @@ def simulate(
     progress: bool | None = None,
     throw: bool = False,
     inputs: dict | None = None,
+    events: Sequence[Event] = (),
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -278,6 +280,11 @@ def simulate(
     inputs : dict, optional
         Values of the model's inputs (``System.add_input``) during the run, by name: a number,
         a function u(t), or a feedback law u(t, q, q̇) (:mod:`pfaff.integrate.inputs`).
+    events : sequence of Event, optional
+        Zero crossings of g(t, q, q̇) to find (:class:`pfaff.Event`), besides the model's own
+        (``System.add_event``, ``model.events``). Each root is bracketed on the integrator's
+        dense output to 1e-12·max(1, |t|), reported in :attr:`Trajectory.events` and added as a
+        reported state; a terminal event ends the run there with status "success".
 
     Returns
     -------
@@ -316,17 +323,30 @@ def simulate(
         return _simulate(
             model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
             integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
-            project_output, progress, throw, inputs,
+            project_output, progress, throw, inputs, events,
         )  # fmt: skip
+
+
+def _events(model: DynamicsModel, events: object) -> UserEvents:
+    """The model's events and the ``events`` argument, checked."""
+    if isinstance(events, Event) or not isinstance(events, Sequence | tuple | list):
+        raise OptionError(f"`events` must be a list of pfaff.Event; got {events!r:.80}")
+    for i, ev in enumerate(events):
+        if not isinstance(ev, Event):
+            raise OptionError(
+                f"`events[{i}]` must be a pfaff.Event(g, name, direction, terminal); got {ev!r:.80}"
+            )
+    return UserEvents([*getattr(model, "events", ()), *events])
 
 
 def _simulate(
     model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
     integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
-    project_output, progress, throw, inputs,
+    project_output, progress, throw, inputs, events,
 ):  # fmt: skip
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
+    user = _events(model, events)
     if inputs:
         model = DrivenModel(model, inputs)
     t0, t1 = _span(t_span)
@@ -367,6 +387,7 @@ def _simulate(
     power = model.power_function() if model.applied_power else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     run.events = AttitudeEvents(model.attitudes)
+    run.user = user
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
@@ -394,6 +415,8 @@ class _Run:
         self.events = AttitudeEvents(())  # MRP switching, Euler singularity (set by simulate)
         self.restart = None  # (t, q, q̇) -> a new stepper, after a switch
         self.switches: list[tuple[float, str]] = []
+        self.user = UserEvents(())  # the user's events (simulate(events=...), model.events)
+        self.records: list[EventRecord] = []  # the events found, in time order
         self._done: list[dict] = []  # the statistics of steppers replaced after a switch
         self._last_q: np.ndarray | None = None  # the state of the last event check
         self._count, self._window_t = 0, t0  # steps and start of the stall window (_stall)
@@ -450,6 +473,28 @@ class _Run:
         self.QD.append(np.array(qd))
         self.W.append(w)
 
+    def _dense_report(self, st: Stepper, points: list, work: float) -> None:
+        """Record the states at ``points`` (t, event index or None) inside the last step, in
+        time order, from its dense output; an event's state also goes to :attr:`records`."""
+        if not points:
+            return
+        states = st.dense(np.array([p[0] for p in points]))
+        for (ti, i), (q, qd) in zip(points, states, strict=True):
+            if not (self.T and self.T[-1] == ti):  # no second state at one time
+                self._record(ti, q, qd, True, work + self._work(ti))
+            if i is not None:
+                name = self.user.names[i]
+                self.records.append(EventRecord(name, ti, self.Q[-1].copy(), self.QD[-1].copy()))
+
+    def _stopped(self, root: tuple[float, int]) -> tuple[str, str]:
+        t, i = root
+        ev = self.user.events[i]
+        nth = f" (occurrence {ev.terminal})" if ev.terminal > 1 else ""
+        return (
+            "success",
+            f"stopped by the terminal event `{self.user.names[i]}`{nth} at t = {t:.17g}",
+        )
+
     def _work(self, b: float | None = None) -> float:
         """∫ P dt from the start of the last step to ``b`` (its end when None): the stepper's own
         quadrature over a whole step, its dense output up to a time inside it
@@ -481,7 +526,9 @@ class _Run:
         status, message = "success", "reached the end of the time span"
         work = 0.0  # of the applied forces, up to the start of the current step
         try:
-            events = bool(self.events)
+            events, user = bool(self.events), self.user
+            if user:
+                user.start(self.t0, q0, qd0)
             while st.t < self.t1:
                 t_prev = st.t
                 try:
@@ -489,21 +536,31 @@ class _Run:
                     self._count += 1
                     if self._count >= STALL_WINDOW:
                         self._stall(st.t)
+                    roots, stop = user.find(st, t_prev) if user else ([], False)
                     if te is None:
                         step_work = self._work()
+                        self._dense_report(st, [(t, i) for t, i in roots], work)
+                        if stop:
+                            status, message = self._stopped(roots[-1])
+                            break
                         done = st
                         switched = self._event(st) if events else None
                         state = done.state() if switched is None else switched
-                        self._record(done.t, *state, self.project_steps, work + step_work)
+                        if not (roots and roots[-1][0] == done.t):  # (a root at the step's end)
+                            self._record(done.t, *state, self.project_steps, work + step_work)
                     else:
-                        j = int(np.searchsorted(te, st.t, side="right"))
-                        if j > k:
-                            for ti, (q, qd) in zip(te[k:j], st.dense(te[k:j]), strict=True):
-                                self._record(float(ti), q, qd, True, work + self._work(float(ti)))
-                            k = j
+                        end = roots[-1][0] if stop else st.t
+                        j = int(np.searchsorted(te, end, side="right"))
+                        points = [(float(ti), None) for ti in te[k:j]] + list(roots)
+                        self._dense_report(st, sorted(points, key=lambda p: p[0]), work)
+                        k = max(j, k)
+                        if stop:
+                            status, message = self._stopped(roots[-1])
+                            break
                         step_work = self._work()
-                        if events:
-                            self._event(st)
+                        switched = self._event(st) if events else None
+                    if user and switched is not None:
+                        user.start(st.t, *switched)
                 except Exception as e:
                     failure = _failure(e, st.t)
                     if failure is e:
@@ -600,6 +657,7 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         parameters=dict(model.parameters),
         projector=projector if project_output else None,
         switches=list(run.switches),
+        events=list(run.records),
         geometry=model.geometry,  # what Trajectory.animate draws
         redundant_rows=ev.get("redundant_rows", np.zeros(len(T), dtype=np.int64)),
     )

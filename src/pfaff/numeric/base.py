@@ -55,6 +55,7 @@ class StreamModel(Quantities, ModelValue):
         multiplier_names: Sequence[str] | None = None,
         inputs: Sequence[str] = (),
         attitudes: Sequence[tuple[str, str, tuple[int, ...], str]] = (),
+        events: Sequence[object] = (),
         geometry: object = None,
         linearizer: object = None,
         restream: Callable | None = None,
@@ -76,6 +77,9 @@ class StreamModel(Quantities, ModelValue):
         # per rigid body: (name, attitude kind, coordinate indices, Euler sequence); see
         # pfaff.integrate.events (MRP switching, the Euler-angle singularity)
         self.attitudes = tuple(attitudes)
+        # the events declared on the system (System.add_event), compiled: objects with name,
+        # direction, terminal, fn(t, q, qd) and with_parameters(values) (pfaff.derive.events)
+        self.events = tuple(events)
         self.geometry = geometry  # what animations draw (pfaff.derive.geometry), or None
         # the linearization's kernel factory (pfaff.derive.linearize), or None
         self.linearizer = linearizer
@@ -84,6 +88,7 @@ class StreamModel(Quantities, ModelValue):
         self._restream = restream
         self.timings: dict[str, float | str] = dict(timings or {})
 
+    events: tuple = ()  # (a model pickled before events were carried)
     evaluator = "template"  # (general models choose theirs: pfaff.numeric.evaluator)
     mass_singular = False  # (a general model's run finds it at its first state)
 

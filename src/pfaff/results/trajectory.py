@@ -46,6 +46,10 @@ class Trajectory:
     coordinate_names, multiplier_names : list of str
     switches : list of (float, str)
         (t, body name) of every MRP shadow-set switch (empty without MRPs).
+    events : list of EventRecord
+        The events of the run in time order (:class:`pfaff.EventRecord`: name, t, q, q̇, kind):
+        the zero crossings of user events (``simulate(events=...)``, ``System.add_event``). Each
+        one's state is also a reported state (in ``t``, ``q``, ...).
     redundant_rows : ndarray of int, shape (k,)
         Per reported time, how many constraint rows depend on the others (the dimension of
         the null space of Aᵀ): on those directions only Aᵀλ is determined, and ``multipliers``
@@ -80,6 +84,7 @@ class Trajectory:
         self.parameters: dict = fields.get("parameters", {})
         self._projector = fields.get("projector")
         self.switches: list[tuple[float, str]] = list(fields.get("switches", []))
+        self.events: list = list(fields.get("events", []))  # of pfaff.EventRecord
         self.geometry = fields.get("geometry")  # the model's, for animate (derive/geometry.py)
         self.redundant_rows: np.ndarray = np.asarray(
             fields.get("redundant_rows", np.zeros(len(self.t), dtype=np.int64)), dtype=np.int64
@@ -252,6 +257,7 @@ class Trajectory:
                 "nc_work": ("time", self.nc_work),
                 "energy_balance": ("time", self.energy_balance),
                 "constraint_residual": (("time", "level", "multiplier"), self.constraint_residual),
+                **self._event_variables(),
             },
             coords={
                 "time": self.t,
@@ -268,6 +274,17 @@ class Trajectory:
             },
         )
         return ds
+
+    def _event_variables(self) -> dict[str, tuple]:
+        """The events as variables over an ``event`` dimension: time, name, kind, q, q̇."""
+        n, ev = len(self.coordinate_names), self.events
+        return {
+            "event_time": ("event", np.array([e.t for e in ev], dtype=float)),
+            "event_name": ("event", np.array([e.name for e in ev], dtype=str)),
+            "event_kind": ("event", np.array([e.kind for e in ev], dtype=str)),
+            "event_q": (("event", "coordinate"), np.reshape([e.q for e in ev], (len(ev), n))),
+            "event_qd": (("event", "coordinate"), np.reshape([e.qd for e in ev], (len(ev), n))),
+        }
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write :meth:`to_xarray` as netCDF (atomically). A model without constraints has no
