@@ -17,7 +17,7 @@ import sympy as sp
 from pfaff.core.symbols import local_q, local_qd, t
 from pfaff.derive.blocks import Block
 from pfaff.numeric import streams
-from pfaff.numeric.streams import StreamCode
+from pfaff.numeric.kernel import StreamCode
 
 
 def constraint_layout(block: Block) -> tuple[list[int], list[sp.Expr]]:
@@ -56,7 +56,7 @@ def stream_code(
     count: int,
     summed: Sequence[bool] | None = None,
 ) -> StreamCode:
-    """Generate the code of a :class:`pfaff.numeric.streams.StreamKernel` over ``count`` instances.
+    """Generate the code of a :class:`pfaff.numeric.kernel.StreamKernel` over ``count`` instances.
 
     Outputs that do not depend on the state (local placeholders of ``k`` coordinates, speeds and
     t) are folded to numbers with the parameter values; the others are lambdified with common

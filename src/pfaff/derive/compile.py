@@ -28,9 +28,10 @@ from pfaff.derive.fused import build_fused
 from pfaff.derive.geometry import build_geometry
 from pfaff.derive.linearize import linearizer_for
 from pfaff.numeric.fused import FusedKernel
+from pfaff.numeric.kernel import StreamCode, StreamKernel
 from pfaff.numeric.model import DENSE_LIMIT, NumericModel
 from pfaff.numeric.parts import ConStreams, DynStreams
-from pfaff.numeric.streams import Index, StreamCode, StreamKernel
+from pfaff.numeric.streams import Index
 
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation

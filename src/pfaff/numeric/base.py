@@ -32,7 +32,7 @@ class StreamModel(Quantities, ModelValue):
     """The numeric model of any system over template streams: the shared part of both kinds.
 
     Evaluation (M, Q − h, A, b, Ȧq̇ + ḃ, f, energies, power) runs the template kernels
-    (:class:`pfaff.numeric.streams.StreamKernel`) over index progressions or index arrays;
+    (:class:`pfaff.numeric.kernel.StreamKernel`) over index progressions or index arrays;
     every checked method of :class:`pfaff.numeric.protocol.DynamicsModel` is here, and the
     unchecked ones with the KKT solver a subclass chooses (``self._solver``):
     :class:`StructuredModel` (families) and :class:`pfaff.NumericModel` (any system).

@@ -1,7 +1,7 @@
 """How a general model evaluates a state: one of three evaluators, chosen by rule.
 
 ``"template"``
-    The template kernels (:class:`pfaff.numeric.streams.StreamKernel`, NumPy over index arrays)
+    The template kernels (:class:`pfaff.numeric.kernel.StreamKernel`, NumPy over index arrays)
     and a LAPACK solve: every model has them.
 ``"python"``
     The fused kernel (:class:`pfaff.numeric.fused.FusedKernel`): the whole system as one

@@ -29,13 +29,12 @@ from pfaff.core.errors import (
 from pfaff.numeric.base import StreamModel
 from pfaff.numeric.checked import CheckedGeneral
 from pfaff.numeric.checks import check_finite
+from pfaff.numeric.constraintlin import linearized_constraints
 from pfaff.numeric.evaluator import machine_rhs
 from pfaff.numeric.field import AccelerationField, not_real
-from pfaff.numeric.fused import FusedLinearization
 from pfaff.numeric.general import DENSE_LIMIT, GeneralParts, fused_states
 from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, KKTSystem, SingularKKT, SparseSolver, row_scales
 from pfaff.numeric.pattern import KKTPattern
-from pfaff.numeric.projection import ArrayLinearization, mass_metric_correction
 from pfaff.numeric.protocol import ConstraintLinearization
 from pfaff.numeric.redundant import independent_rows, min_norm_multipliers
 from pfaff.numeric.solvers import names
@@ -327,46 +326,8 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         self, t: float, q: np.ndarray, qd: np.ndarray, tol: float
     ) -> ConstraintLinearization:
         """The constraints linearized at a state for the projection (:mod:`pfaff.numeric.projection`):
-        mass-metric corrections, on Python floats for small fused systems
-        (:class:`pfaff.numeric.fused.FusedLinearization`), else on arrays."""
-        fk = self._fused
-        run = self._run_state
-        if fk is not None and fk.cfn is not None and not run["full"] and run["rows"] is None:
-            try:
-                return FusedLinearization(
-                    fk, t, q.tolist(), qd.tolist(), list(self._p), tol, self._holonomic_list,
-                    lambda: self._array_linearization(t, q, qd, tol),
-                )  # fmt: skip
-            except (ValueError, ArithmeticError, TypeError):
-                pass  # not defined or not real here: the array path names the error
-        return self._array_linearization(t, q, qd, tol)
-
-    def _array_linearization(
-        self, t: float, q: np.ndarray, qd: np.ndarray, tol: float
-    ) -> ArrayLinearization:
-        K, _, _, _, f, g = self._kkt(t, q, qd)
-        n, cache = self.n, []
-        A, M = K[n:, :n], K[:n, :n]
-        rows = self._run_state["rows"]
-        if sps.issparse(K):  # the KKT solve with zero forcing: M⁻¹Aᵀ(A M⁻¹Aᵀ)⁻¹ r by SuperLU
-            sq = np.asarray(A.multiply(A).sum(axis=1)).ravel()
-            zeros = np.zeros(n)
-
-            def correct(r: np.ndarray) -> np.ndarray:
-                return self._solver.solve(KKTSystem(zeros, r, K), multipliers=False)[0]
-
-        else:
-            sq = (A * A).sum(1)
-
-            def correct(r: np.ndarray) -> np.ndarray:
-                if not cache:  # redundant rows: the correction of the independent ones
-                    cache.append(mass_metric_correction(M, A if rows is None else A[rows]))
-                return cache[0](r if rows is None else r[rows])
-
-        f = np.where(self.holonomic, f, 0.0)
-        return ArrayLinearization(
-            f, g, np.sqrt(sq), tol, correct, correct, lambda v: self.residual(t, q, v)[1]
-        )
+        see :func:`pfaff.numeric.constraintlin.linearized_constraints`."""
+        return linearized_constraints(self, t, q, qd, tol)
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """(M, A, Q − h, f, g) at an unchecked state: dense when small, else CSR."""

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pfaff.numeric.streams import Index, StreamKernel
+from pfaff.numeric.kernel import StreamKernel
+from pfaff.numeric.streams import Index
 
 
 class DynStreams:

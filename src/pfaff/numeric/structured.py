@@ -5,7 +5,7 @@ M and A are never assembled for the triangular solve: each template contributes 
 entries (a value per instance at global row ``start + step*i`` and column ``start' + step'*i``),
 applied with slice arithmetic.
 
-Kernels (:class:`pfaff.numeric.streams.StreamKernel`) evaluate each template over chunks of instances on
+Kernels (:class:`pfaff.numeric.kernel.StreamKernel`) evaluate each template over chunks of instances on
 two threads, take sin and cos of an angle together (:mod:`pfaff.numeric.trig`), and reduce outputs that
 only count summed (a force on an ordinary coordinate, energies) without storing them.
 
