@@ -214,7 +214,8 @@ def report(rows: list, runs: int, args: argparse.Namespace, t_plain: float, star
 
 # ------------------------------------------------------------------ the shipped compiled model
 def chain_file(links: int) -> str:
-    """A model file: ``links`` point masses m on massless links of length l, absolute angles."""
+    """A model file: ``links`` point masses m on massless links of length l, absolute angles,
+    gravity g."""
     names = [f"th{i}" for i in range(1, links + 1)]
     text = [
         "[model]",
@@ -225,11 +226,14 @@ def chain_file(links: int) -> str:
     ]
     xs: list[str] = []
     ys: list[str] = []
+    depth = []  # the depth of each mass below the pivot, for the potential
     for c in names:
         xs.append(f"l*sin({c})")
         ys.append(f"l*cos({c})")
         x, y = " + ".join(xs), " + ".join(ys)
+        depth.append(f"({y})")
         text += ["[[particles]]", 'mass = "m"', f'position = ["{x}", "-({y})"]', ""]
+    text.insert(4, f'potential = "-m*g*({" + ".join(depth)})"')
     text += ["[initial]", "q = { " + ", ".join(f"{c} = 0.1" for c in names) + " }", ""]
     text += ["[simulate]", "t_end = 2.0", ""]
     return "\n".join(text)

@@ -75,6 +75,7 @@ def test_model_builds_with_one_redundant_row() -> None:
     np.testing.assert_allclose(joints_of(system, q0)[:4], BricardReference().points[1:5])
 
 
+@pytest.mark.slow
 def test_initial_accelerations_match_reference() -> None:
     """The bar centres' accelerations at the release, pfaff against the reference."""
     ref = BricardReference()

@@ -76,6 +76,7 @@ def test_inconsistent_rows_are_refused() -> None:
         s.equations().compile({})
 
 
+@pytest.mark.slow
 def test_model_builds() -> None:
     s = fourbar3d()
     assert len(s.coordinates) == 18 and len(s.constraint_rows()[0]) == 20

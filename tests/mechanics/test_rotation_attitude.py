@@ -136,6 +136,7 @@ def test_accelerations_match_kane(arm, kane) -> None:
     assert worst < 1e-10, worst
 
 
+@pytest.mark.slow
 def test_pd_simulation_matches_solve_ivp(arm, kane) -> None:
     *_, model = arm
     q0, u0 = np.array([0.1, 0.3, -0.5]), np.array([0.5, -0.2, 0.8])

@@ -134,7 +134,14 @@ def _fresh_process(model: object, t: float, q: np.ndarray, qd: np.ndarray) -> tu
     return pickle.loads(out.stdout)
 
 
-@pytest.mark.parametrize("evaluator", ["template", "python", "machine"])
+@pytest.mark.parametrize(
+    "evaluator",
+    [
+        pytest.param("template", marks=pytest.mark.slow),
+        pytest.param("python", marks=pytest.mark.slow),
+        "machine",
+    ],
+)
 def test_a_pickled_model_is_bit_identical_in_a_fresh_process(evaluator: str) -> None:
     model = chain(8).equations().compile({}, evaluator=evaluator)
     rng = np.random.default_rng(4)
