@@ -213,3 +213,18 @@ def test_compile_machine_code_only_moves_its_cost() -> None:
     big = chain(8).equations().compile({})
     assert big.compile_machine_code() is True
     assert big.evaluator == "machine" and "machine_code" in big.timings
+
+
+def test_an_unpickled_machine_model_changes_values_and_runs_the_same() -> None:
+    """A sweep's worker gets the model pickled: other values through with_parameters, machine
+    code included (it has no compiler of its own), bit for bit what the original gives."""
+    model = chain(8).equations().compile({})
+    assert model.evaluator == "machine"
+    q0 = np.linspace(0.1, 0.8, 8)
+    here = model.with_parameters({})
+    there = pickle.loads(pickle.dumps(model)).with_parameters({})
+    assert there.evaluator == "machine"
+    a = pfaff.simulate(here, q0, np.zeros(8), (0, 0.5))
+    b = pfaff.simulate(there, q0, np.zeros(8), (0, 0.5))
+    np.testing.assert_array_equal(a.q, b.q)
+    np.testing.assert_array_equal(a.multipliers, b.multipliers)

@@ -17,6 +17,10 @@ call's own overhead) beats the generated Python, which costs 1 µs on a pendulum
 and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
 else the generated Python. No timing decides anything at run time: the same model, state and
 options take the same path in every process. ``compile(..., evaluator=...)`` overrides the rule.
+The evaluator is what a run's right-hand side and unchecked solve use; checked single-state calls
+(``accelerations``, the matrices) evaluate the fused kernel as generated Python where there is
+one (the reference machine code is checked against), so that a first ``accelerations()`` never
+waits for a compiler.
 """
 
 from __future__ import annotations
@@ -87,6 +91,11 @@ class MachineCode:
         self._done = False
         self.compiled: Callable | None = None
         self.seconds = 0.0
+
+    @property
+    def available(self) -> bool:
+        """Whether it can give machine code: a compiler to build it, or the code itself."""
+        return self._build is not None or self.compiled is not None
 
     def get(self, check: Callable[[Callable], str]) -> Callable | None:
         """The compiled function, checked once by ``check`` (returns "" when it agrees)."""

@@ -71,7 +71,10 @@ class GeneralParts:
             fused, why = None, f"the solver is {solver!r} (the fused kernel's solve is range-space)"
         if fused is not None and machine_code is None:
             fused, why = self._checked_fused(fused)
-        has_machine = fused is not None and fused.llvm is not None
+        # (an unpickled kernel has no compiler, but its MachineCode carries the compiled code)
+        has_machine = fused is not None and (
+            fused.llvm is not None or (machine_code is not None and machine_code.available)
+        )
         self.evaluator = choose(evaluator, n, m, fused is not None, why, has_machine)
         self._fused = None if self.evaluator == "template" else fused
         self._fused_kernel = fused  # kept for with_parameters (shared as it is)
