@@ -17,10 +17,9 @@ call's own overhead) beats the generated Python, which costs 1 µs on a pendulum
 and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
 else the generated Python. No timing decides anything at run time: the same model, state and
 options take the same path in every process. ``compile(..., evaluator=...)`` overrides the rule.
-The evaluator is what a run's right-hand side and unchecked solve use; checked single-state calls
-(``accelerations``, the matrices) evaluate the fused kernel as generated Python where there is
-one (the reference machine code is checked against), so that a first ``accelerations()`` never
-waits for a compiler.
+Machine code is compiled on a model's first evaluation (0.15 s for an 8-link chain, 0.8 s for the
+Whipple bicycle, measured here) and kept in the on-disk cache, so later processes load it in
+milliseconds; ``compile_machine_code()`` moves that cost to a moment of the user's choosing.
 """
 
 from __future__ import annotations

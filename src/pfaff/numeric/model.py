@@ -105,17 +105,14 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
             object.__setattr__(self, "_pattern", KKTPattern(self))
         return self._pattern  # type: ignore[return-value]
 
-    def _fused_values(
-        self, t: float, q: np.ndarray, qd: np.ndarray, use_machine: bool = False
-    ) -> np.ndarray:
+    def _fused_values(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The fused kernel's flat outputs at a state; non-real values are an error naming t.
-        ``use_machine`` (a run's unchecked :meth:`solve` where the evaluator is machine code):
-        one call also gives q̈ and λ, kept for :meth:`solve`. Checked single-state calls use the
-        generated Python kernel, the reference the machine code is checked against."""
+        With machine code as the evaluator, one call also gives q̈ and λ (kept for
+        :meth:`solve`)."""
         fk = self._fused
         assert fk is not None
         self._run_state["last"] = None
-        machine = self._machine() if use_machine else None
+        machine = self._machine()
         if machine is not None:
             n, m = self.n, self.m
             buf = self._run_state["buf"]
@@ -224,7 +221,7 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         if self.evaluator == "machine" and not (
             alpha or beta or run["full"] or run["rows"] is not None
         ):
-            self._fused_values(t, q, qd, use_machine=True)
+            self._fused_values(t, q, qd)
             last = self._run_state["last"]
             if last is not None:
                 return last[3][: self.n].copy(), last[3][self.n :].copy()

@@ -25,6 +25,7 @@ import scipy.linalg
 from pfaff.core.errors import RedundancyWarning
 from pfaff.numeric.rank import null_basis, redundant_sets
 
+_geqp3 = scipy.linalg.lapack.dgeqp3  # pivoted QR without scipy.linalg.qr's checks (µs per call)
 REDUNDANT_DENSE = 4000  # unknowns n + m up to which a sparse model's redundant rows are found
 RANK_TOL = 1e-9  # a pivot of QR(Aᵀ) (unit rows) below this times the largest: a dependent row
 PROBE = 1e-3  # the step to the nearby states of the persistence test (times 1 + |q|)
@@ -43,13 +44,19 @@ def independent_rows(A: np.ndarray, tol: float = RANK_TOL) -> np.ndarray | None:
     m = A.shape[0]
     if m == 0:
         return None
-    norms = np.sqrt((A * A).sum(axis=1))
-    if not norms.size or (norms <= 1e-12 * norms.max(initial=0.0)).any() or not norms.max() > 0:
+    norms = np.sqrt(np.einsum("ij,ij->i", A, A))
+    top = norms.max()
+    if not top > 0 or norms.min() <= 1e-12 * top:
         return None  # a row with a zero gradient is singular, not redundant: the solve names it
-    unit = A / norms[:, None]
-    R, piv = scipy.linalg.qr(unit.T, mode="r", pivoting=True)
-    d = np.abs(np.diag(R))
-    rank = int(np.sum(d > tol * d[0])) if d.size and d[0] > 0 else 0
+    if m == 1:
+        return None
+    R, piv, _, _, info = _geqp3((A / norms[:, None]).T)
+    if info != 0:  # (LAPACK's own argument check: not reached for a finite matrix)
+        R, piv = scipy.linalg.qr((A / norms[:, None]).T, mode="r", pivoting=True)
+    else:
+        piv = piv - 1  # LAPACK's pivots count from 1
+    d = np.abs(R.diagonal())
+    rank = int(np.count_nonzero(d > tol * d[0])) if d[0] > 0 else 0
     if rank == m:
         return None
     return np.sort(piv[:rank])
