@@ -207,12 +207,18 @@ def test_family_models_have_with_parameters_and_say_what_they_lack() -> None:
         model.linearize(0.0, q, qd, ["x"])
 
 
-def test_compile_machine_code_only_moves_its_cost() -> None:
+def test_compile_machine_code_switches_to_machine_code_now() -> None:
     small = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
-    assert small.evaluator == "python" and small.compile_machine_code() is False
+    q, qd = [0.5], [0.3]
+    before = small.accelerations(0.0, q, qd)[0]
+    assert small.evaluator == "python" and small.compile_machine_code() is True
+    assert small.evaluator == "machine" == small.timings["evaluator"]
+    np.testing.assert_allclose(small.accelerations(0.0, q, qd)[0], before, rtol=1e-13)
     big = chain(8).equations().compile({})
     assert big.compile_machine_code() is True
     assert big.evaluator == "machine" and "machine_code" in big.timings
+    template = chain(4).equations().compile({}, evaluator="template")
+    assert template.compile_machine_code() is False and template.evaluator == "template"
 
 
 def test_an_unpickled_machine_model_changes_values_and_runs_the_same() -> None:

@@ -19,7 +19,8 @@ else the generated Python. No timing decides anything at run time: the same mode
 options take the same path in every process. ``compile(..., evaluator=...)`` overrides the rule.
 Machine code is compiled on a model's first evaluation (0.15 s for an 8-link chain, 0.8 s for the
 Whipple bicycle, measured here) and kept in the on-disk cache, so later processes load it in
-milliseconds; ``compile_machine_code()`` moves that cost to a moment of the user's choosing.
+milliseconds; ``compile_machine_code()`` switches a model to machine code now (and so moves that
+cost to a moment of the user's choosing).
 """
 
 from __future__ import annotations

@@ -164,24 +164,36 @@ class GeneralParts:
         return "" if ok else "it disagrees with the generated Python code at a test state"
 
     def compile_machine_code(self) -> bool:
-        """Compile (or load from the on-disk cache) the machine code now, so that the first
-        evaluation does not pay for it; False when this model does not evaluate with machine
-        code (its evaluator is ``"python"`` or ``"template"``, or SymEngine has no LLVM).
+        """Switch this model to machine code now: compile it (or load it from the on-disk
+        cache) and make it the evaluator; False, and nothing changed, when the model cannot
+        (no fused kernel, or SymEngine without LLVM, or a build that failed: warned).
 
-        The evaluator is fixed when the model is compiled (``compile(..., evaluator=...)``):
-        this only moves the machine code's one-time cost to now.
+        This is the one change a compiled model accepts after it is built, and only on this
+        explicit request; results then follow the machine code's rounding
+        (``model.timings["evaluator"]`` says which evaluator is in use). A model whose rule
+        already chose machine code only pays the compilation now instead of at its first
+        evaluation.
 
         Examples
         --------
         >>> import pfaff
         >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
-        >>> model.evaluator, model.compile_machine_code()
-        ('python', False)
+        >>> model.evaluator
+        'python'
+        >>> model.compile_machine_code(), model.evaluator
+        (True, 'machine')
         """
-        ok = self._machine() is not None
-        if ok and self._machine_code is not None:
-            self.timings.setdefault("machine_code", self._machine_code.seconds)  # type: ignore[attr-defined]
-        return ok
+        mc = self._machine_code
+        if self._fused is None or mc is None or not mc.available:
+            return False
+        before = self.evaluator  # type: ignore[has-type]
+        object.__setattr__(self, "evaluator", "machine")
+        if self._machine() is None:  # the build failed (warned): the model stays as it was
+            object.__setattr__(self, "evaluator", before)
+            return False
+        self.timings["evaluator"] = "machine"  # type: ignore[attr-defined]
+        self.timings.setdefault("machine_code", mc.seconds)  # type: ignore[attr-defined]
+        return True
 
     def _runtime_parameters(self) -> bool:
         return self._fused is not None
