@@ -148,12 +148,57 @@ def _kernel(
     lazy: bool = False,
 ) -> StreamKernel:
     """A template's kernel; ``lazy``: its code generated on first use."""
-
-    def make() -> StreamCode:
-        outs = exprs() if callable(exprs) else exprs  # a callable: the entries made on demand
-        return stream_code(len(cols), outs, params, values, count, summed)
-
+    make = _Code(len(cols), exprs, tuple(params), tuple(values), count, summed)
     return StreamKernel(cols, make if lazy else make(), count)
+
+
+class _Code:
+    """A template kernel's code, generated when called (:func:`stream_code`). An object, not a
+    closure, so that a model pickles with its kernels not yet generated: a sweep's worker makes
+    only those it uses."""
+
+    def __init__(
+        self, k: int, exprs: list | Callable[[], list], params: tuple, values: tuple,
+        count: int, summed: list[bool] | None,
+    ) -> None:  # fmt: skip
+        self.k, self.exprs, self.params, self.values = k, exprs, params, values
+        self.count, self.summed = count, summed
+
+    def __call__(self) -> StreamCode:
+        outs = self.exprs() if callable(self.exprs) else self.exprs  # the entries on demand
+        return stream_code(self.k, outs, self.params, self.values, self.count, self.summed)
+
+
+class _DynEntries:
+    """The upper mass entries and the forcing entries of a dynamics template, read when called."""
+
+    def __init__(self, loc: object, upper: list, fidx: list) -> None:
+        self.loc, self.upper, self.fidx = loc, upper, fidx
+
+    def __call__(self) -> list:
+        loc = self.loc
+        forcing = loc.forcing  # type: ignore[attr-defined]
+        return [loc.mass.get(ab, sp.S.Zero) for ab in self.upper] + [  # type: ignore[attr-defined]
+            forcing.get(a, sp.S.Zero) for a in self.fidx
+        ]
+
+
+class _EnergyKernels:
+    """``energy_kernel(which)`` of :class:`pfaff.numeric.parts.DynStreams` (picklable)."""
+
+    def __init__(self, block: Block, cols: list, params: tuple, values: tuple) -> None:
+        self.block, self.cols, self.params, self.values = block, cols, params, values
+
+    def __call__(self, which: str) -> StreamKernel:
+        block, cols = self.block, self.cols
+        T, V = energy_exprs(block)
+        parts = power_exprs(block) if which == "power" else [T, V]
+        if which == "energies":
+            k = len(cols)
+            T0 = T.xreplace({local_qd(a): 0 for a in range(k)})
+            Tneg = T.xreplace({local_qd(a): -local_qd(a) for a in range(k)})
+            parts += [T0, (T + Tneg) / 2 - T0]
+        return _kernel(cols, parts, self.params, self.values, block.n_inst, [True] * len(parts))
 
 
 def dyn_streams(
@@ -174,24 +219,10 @@ def dyn_streams(
     rows = [cols[a] for a in fidx]
     summed = [False] * len(upper) + [isinstance(ix, Index) and ix.fixed for ix in rows]
 
-    def exprs() -> list:
-        forcing = loc.forcing
-        return [loc.mass.get(ab, sp.S.Zero) for ab in upper] + [
-            forcing.get(a, sp.S.Zero) for a in fidx
-        ]
-
-    kernel = _kernel(cols, exprs, params, values, block.n_inst, summed, lazy)
-
-    def energy_kernel(which: str) -> StreamKernel:
-        T, V = energy_exprs(block)
-        parts = power_exprs(block) if which == "power" else [T, V]
-        if which == "energies":
-            k = len(cols)
-            T0 = T.xreplace({local_qd(a): 0 for a in range(k)})
-            Tneg = T.xreplace({local_qd(a): -local_qd(a) for a in range(k)})
-            parts += [T0, (T + Tneg) / 2 - T0]
-        return _kernel(cols, parts, params, values, block.n_inst, [True] * len(parts))
-
+    kernel = _kernel(
+        cols, _DynEntries(loc, upper, fidx), params, values, block.n_inst, summed, lazy
+    )
+    energy_kernel = _EnergyKernels(block, cols, tuple(params), tuple(values))
     upper_streams = [(cols[a], cols[b], a != b) for a, b in upper]
     return DynStreams(kernel, upper_streams, rows, energy_kernel, has_power=bool(loc.Q))
 

@@ -121,12 +121,12 @@ class StreamKernel:
         return getattr(self, name)
 
     def __getstate__(self) -> dict:
-        """Its columns and code (generated now if it was not yet): no work arrays."""
+        """Its columns and code, or the maker of its code when it is not generated yet (the
+        compile stage's makers pickle: the receiver generates only what it uses); no work
+        arrays."""
         code = self.__dict__.get("_code")
         if code is None:
-            make = self.__dict__.pop("_make")
-            self._bind(make())
-            code = self._code
+            code = self.__dict__["_make"]
         return {"columns": self.columns, "count": self.count, "code": code, "chunk": self.chunk}
 
     def __setstate__(self, state: dict) -> None:

@@ -54,23 +54,6 @@ class DynStreams:
         self._pkernel: StreamKernel | None = None
         self._wkernel: StreamKernel | None = None
 
-    def __getstate__(self) -> dict:
-        """The kernels, the lazily made ones made now (the factory stays behind: it holds the
-        derivation's expressions)."""
-        self.energy_kernels()
-        state = dict(self.__dict__)
-        state["_energy_kernel"] = None
-        return state
-
-    def energy_kernels(self) -> None:
-        """Make the energy, energies and power kernels now (a pickle carries them)."""
-        if self._ekernel is None:
-            self._ekernel = self._energy_kernel("energy")
-        if self._pkernel is None:
-            self._pkernel = self._energy_kernel("energies")
-        if self.has_power and self._wkernel is None:
-            self._wkernel = self._energy_kernel("power")
-
     def mass_values(self, outs: list) -> list:
         """Values of :attr:`mass` entries from the kernel outputs (mirrored entries repeated)."""
         nu = len(self.upper)
