@@ -12,6 +12,7 @@ The package is laid out by pipeline stage, imports going only downward (see ARCH
 
 from pfaff import attitude, models
 from pfaff.api import EquationsOfMotion, RootLocus, Solution, System, root_locus
+from pfaff.api.fromsympy import from_sympy
 from pfaff.core.errors import (
     BodyInertiaError,
     ConstraintError,
@@ -73,6 +74,7 @@ __all__ = [
     "attitude",
     "consistent_state",
     "coordinates",
+    "from_sympy",
     "load_model",
     "models",
     "root_locus",
