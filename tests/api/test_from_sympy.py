@@ -161,3 +161,123 @@ def test_refuses_a_body():
     body = RigidBody("B", O0, B, 1, (inertia(B, 1, 1, 1), O0))
     with pytest.raises(pfaff.ModelError, match="got RigidBody"):
         pfaff.from_sympy(body)
+
+
+def _rolling_disc_kane():
+    """A thin disc rolling without slip on the plane z = 0: yaw q1, lean q2, spin q3, contact
+    point (q4, q5). Speeds: u1..u3 the disc's angular velocity in the lean frame B, u4, u5 the
+    contact point's velocity (dependent, from the two no-slip constraints)."""
+    q = dynamicsymbols("q1:6")
+    u = dynamicsymbols("u1:6")
+    m, r = sp.symbols("m r")
+    N = ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", [q[0], N.z])
+    B = A.orientnew("B", "Axis", [q[1], A.x])
+    C = B.orientnew("C", "Axis", [q[2], B.y])
+    w = C.ang_vel_in(N)
+    kd = [w.dot(B.x) - u[0], w.dot(B.y) - u[1], w.dot(B.z) - u[2]]
+    kd += [q[3].diff(t) - u[3], q[4].diff(t) - u[4]]
+    C.set_ang_vel(N, u[0] * B.x + u[1] * B.y + u[2] * B.z)
+    O0 = Point("O")
+    O0.set_vel(N, 0)
+    D = O0.locatenew("D", q[3] * N.x + q[4] * N.y + r * B.z)
+    D.set_vel(N, D.pos_from(O0).dt(N))
+    contact = D.vel(N) + C.ang_vel_in(N).cross(-r * B.z)  # the disc's material contact point
+    I = inertia(B, m * r**2 / 4, m * r**2 / 2, m * r**2 / 4)  # noqa: E741
+    disc = RigidBody("disc", D, C, m, (I, D))
+    km = KanesMethod(
+        N,
+        q_ind=list(q),
+        u_ind=list(u[:3]),
+        kd_eqs=kd,
+        u_dependent=list(u[3:]),
+        velocity_constraints=[contact.dot(A.x), contact.dot(A.y)],
+    )
+    km.kanes_equations([disc], [(D, -m * g * N.z)])
+    return km, (m, r)
+
+
+def test_rolling_disc_kane_nonholonomic():
+    km, (m, r) = _rolling_disc_kane()
+    vals = {m: 1.7, r: 0.4, g: 9.81}
+    system = pfaff.from_sympy(km)
+    assert system.n_constraints == 2
+    model = system.equations().compile(vals)
+    q, u = list(km.q), list(km.u)
+    qdmap = km.kindiffdict()
+    qd_of_u = sp.Matrix([qdmap[c.diff(t)] for c in q])
+    ud = sp.symbols("ud1:6")
+    qdd_of_ud = qd_of_u.diff(t).xreplace(dict(zip([c.diff(t) for c in u], ud, strict=True)))
+    qdd_of_ud = qdd_of_ud.xreplace(qdmap)
+    pars = list(vals)
+    f_kane = sp.lambdify([*q, *u, *pars], [km.mass_matrix_full, km.forcing_full])
+    f_qd = sp.lambdify([*q, *u, *pars], qd_of_u)
+    f_qdd = sp.lambdify([*q, *u, *ud, *pars], qdd_of_ud)
+    # dependent speeds from the constraints k_nh u + f_nh = 0
+    f_nh = sp.lambdify([*q, *u[:3], *pars], [km._k_nh[:, 3:], km._k_nh[:, :3], km._f_nh])
+    rng = np.random.default_rng(3)
+    pv = list(vals.values())
+    worst = 0.0
+    for _ in range(5):
+        qn = rng.uniform(-1, 1, 5)
+        ui = rng.uniform(-2, 2, 3)
+        Kd, Ki, f0 = (np.array(a, float) for a in f_nh(*qn, *ui, *pv))
+        un = np.concatenate([ui, np.linalg.solve(Kd, -(Ki @ ui + f0.ravel()))])
+        Mn, Fn = f_kane(*qn, *un, *pv)
+        x = np.linalg.solve(np.array(Mn, float), np.array(Fn, float).ravel())
+        assert x.size == 10  # q̇ (5) and u̇ (all 5 speeds)
+        ref = np.array(f_qdd(*qn, *un, *x[5:], *pv), float).ravel()
+        qd = np.array(f_qd(*qn, *un, *pv), float).ravel()
+        np.testing.assert_allclose(model.constraint_residual(0.0, qn, qd)[1], 0, atol=1e-12)
+        qdd, _ = model.accelerations(0.0, qn, qd)
+        worst = max(worst, np.max(np.abs(qdd - ref)) / max(1.0, np.max(np.abs(ref))))
+    assert worst < 1e-10
+
+
+def test_cartesian_pendulum_kane_configuration_constraint():
+    """Kane's configuration constraint is holonomic; its restated velocity constraint is dropped."""
+    x, y = dynamicsymbols("x y")
+    ux, uy = dynamicsymbols("ux uy")
+    m, L = sp.symbols("m L")
+    N = ReferenceFrame("N")
+    P = Point("P")
+    P.set_vel(N, ux * N.x + uy * N.y)
+    km = KanesMethod(
+        N,
+        q_ind=[x],
+        u_ind=[ux],
+        kd_eqs=[x.diff(t) - ux, y.diff(t) - uy],
+        q_dependent=[y],
+        configuration_constraints=[x**2 + y**2 - L**2],
+        u_dependent=[uy],
+        velocity_constraints=[x * ux + y * uy],
+    )
+    km.kanes_equations([Particle("p", P, m)], [(P, -m * g * N.y)])
+    system = pfaff.from_sympy(km)
+    assert system.n_constraints == 1  # the holonomic row only
+    vals = {m: 0.8, L: 1.5, g: 9.81}
+    model = system.equations().compile(vals)
+    f = sp.lambdify([x, y, ux, uy, *vals], [km.mass_matrix_full, km.forcing_full])
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        th, w = rng.uniform(-2, 2, 2)
+        q = 1.5 * np.array([np.sin(th), -np.cos(th)])
+        v = 1.5 * w * np.array([np.cos(th), np.sin(th)])
+        Mn, Fn = f(*q, *v, *vals.values())
+        ref = np.linalg.solve(np.array(Mn, float), np.array(Fn, float).ravel())[2:]
+        qdd, _ = model.accelerations(0.0, q, v)
+        np.testing.assert_allclose(qdd, ref, rtol=1e-12, atol=1e-12)
+
+
+def test_mechanics_system_double_pendulum():
+    """A sympy.physics.mechanics.System (the Kane data) maps like the KanesMethod it forms."""
+    km = _double_pendulum_kane()
+    s = sp.physics.mechanics.System(km._inertial)
+    s.q_ind, s.u_ind = list(km.q), list(km.u)
+    s.kdes = [c.diff(t) - v for c, v in zip(km.q, km.u, strict=True)]
+    s.add_bodies(*km.bodies)
+    s.add_loads(*km.loads)
+    a = pfaff.from_sympy(s).equations().compile(VALUES)
+    b = pfaff.from_sympy(km).equations().compile(VALUES)
+    for q, v in ([0.3, -0.5], [0.2, 1.1]), ([2.0, 1.0], [-1.0, 0.5]):
+        np.testing.assert_allclose(a.accelerations(0, q, v)[0], b.accelerations(0, q, v)[0])
