@@ -281,3 +281,36 @@ def test_mechanics_system_double_pendulum():
     b = pfaff.from_sympy(km).equations().compile(VALUES)
     for q, v in ([0.3, -0.5], [0.2, 1.1]), ([2.0, 1.0], [-1.0, 0.5]):
         np.testing.assert_allclose(a.accelerations(0, q, v)[0], b.accelerations(0, q, v)[0])
+
+
+def test_knife_edge_lagrange_nonholonomic_and_torque():
+    """A nonholonomic LagrangesMethod with a torque on a frame: q̈ and λ_pfaff = +λ (matrices)."""
+    x, y, th = dynamicsymbols("x y theta")
+    m, J, tau = sp.symbols("m J tau")
+    N = ReferenceFrame("N")
+    B = N.orientnew("B", "Axis", [th, N.z])
+    P = Point("P")
+    P.set_vel(N, x.diff(t) * N.x + y.diff(t) * N.y)
+    body = RigidBody("sleigh", P, B, m, (inertia(B, 0, 0, J), P))
+    lm = LagrangesMethod(
+        Lagrangian(N, body),
+        [x, y, th],
+        nonhol_coneqs=[-sp.sin(th) * x.diff(t) + sp.cos(th) * y.diff(t)],
+        forcelist=[(B, tau * N.z), (P, -m * g * N.x)],
+        frame=N,
+    )
+    lm.form_lagranges_equations()
+    vals = {m: 1.2, J: 0.3, tau: 0.7, g: 9.81}
+    model = pfaff.from_sympy(lm, parameters=["m", "J", "tau", "g"]).equations().compile(vals)
+    qd = [c.diff(t) for c in (x, y, th)]
+    f = sp.lambdify([x, y, th, *qd, *vals], [lm.mass_matrix_full, lm.forcing_full])
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        q = rng.uniform(-2, 2, 3)
+        s = rng.uniform(-1, 1)
+        v = np.array([s * np.cos(q[2]), s * np.sin(q[2]), rng.uniform(-1, 1)])
+        Mn, Fn = f(*q, *v, *vals.values())
+        ref = np.linalg.solve(np.array(Mn, float), np.array(Fn, float).ravel())
+        qdd, lam = model.accelerations(0.0, q, v)
+        np.testing.assert_allclose(qdd, ref[3:6], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(lam, ref[6:], rtol=1e-12, atol=1e-12)

@@ -285,8 +285,8 @@ def _with_parameters(pieces: _Pieces, parameters: Mapping | Sequence | None) -> 
                 raise ModelError(f"`parameters`: {key!r} is not a symbol of the model")
             subs[sym] = sp.sympify(value)
     elif parameters is not None:
-        declared = set(parameters)
-        stray = sorted(free - declared, key=str)
+        declared = {p if isinstance(p, str) else getattr(p, "name", p) for p in parameters}
+        stray = sorted((s for s in free if s.name not in declared), key=str)
         if stray:
             raise ModelError(
                 f"`parameters`: the model has symbols outside the declared parameters: {stray}"
