@@ -34,6 +34,7 @@ from pfaff.integrate.stepper import Stepper, StepperOptions
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 from pfaff.mechanics.bodies import Body
 from pfaff.modelfile import ModelFile, ModelFileError, load_model
+from pfaff.modelfile.urdf import load_urdf
 from pfaff.numeric import NumericModel
 from pfaff.numeric.linearization import Linearization
 from pfaff.results.trajectory import Trajectory
@@ -74,6 +75,7 @@ __all__ = [
     "consistent_state",
     "coordinates",
     "load_model",
+    "load_urdf",
     "models",
     "root_locus",
     "simulate",
