@@ -35,6 +35,7 @@ from pfaff.integrate.stepper import Stepper, StepperOptions
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 from pfaff.mechanics.bodies import Body
 from pfaff.modelfile import ModelFile, ModelFileError, load_model
+from pfaff.modelfile.urdf import load_urdf
 from pfaff.numeric import NumericModel
 from pfaff.numeric.linearization import Linearization
 from pfaff.results.trajectory import Trajectory
@@ -76,6 +77,7 @@ __all__ = [
     "coordinates",
     "from_sympy",
     "load_model",
+    "load_urdf",
     "models",
     "root_locus",
     "simulate",
