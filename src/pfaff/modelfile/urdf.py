@@ -118,9 +118,19 @@ def load_urdf(path: str | os.PathLike, fixed_base: bool = True) -> System:
 
     Examples
     --------
-    >>> import pfaff  # doctest: +SKIP
-    >>> arm = pfaff.load_urdf("examples/arm6.urdf")  # doctest: +SKIP
-    >>> model = arm.equations().compile(arm.urdf_values)  # doctest: +SKIP
+    >>> import pathlib, tempfile, pfaff
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "pendulum.urdf"
+    >>> _ = path.write_text('''<robot name="pendulum">
+    ...   <link name="base"/>
+    ...   <link name="bob"><inertial><origin xyz="0 0 -1"/><mass value="2"/>
+    ...     <inertia ixx="0" iyy="0" izz="0" ixy="0" ixz="0" iyz="0"/></inertial></link>
+    ...   <joint name="hinge" type="continuous"><parent link="base"/><child link="bob"/>
+    ...     <axis xyz="0 1 0"/></joint>
+    ... </robot>''')
+    >>> arm = pfaff.load_urdf(path)
+    >>> model = arm.equations().compile(arm.urdf_values)
+    >>> round(float(model.accelerations(0.0, [0.5], [0.0])[0][0]), 6)  # -g sin(q) / L
+    -4.703165
     """
     if not isinstance(fixed_base, bool):
         raise ModelError(f"`fixed_base` must be True or False, got {fixed_base!r:.40}")
