@@ -21,6 +21,13 @@ if TYPE_CHECKING:
     from pfaff.numeric.linearization import Linearization
 
 
+# n + m up to which a checked call runs without limiting BLAS threads: on the Whipple bicycle
+# (n + m = 11) under two busy-loop processes with the default OpenBLAS threads, accelerations() took
+# 148 µs unlimited and 184 µs with threadpoolctl's limit around it (no thread waits left: the small
+# solves are LAPACK's unthreaded paths); larger dense systems are limited once per call.
+UNLIMITED_UP_TO = 64
+
+
 class CheckedGeneral:
     """Checked methods of :class:`pfaff.NumericModel` (see the module docstring)."""
 
@@ -116,32 +123,39 @@ class CheckedGeneral:
         """
         if inputs is not None:
             return self._with_inputs(inputs).accelerations(t, q, qd)
+        if self.n + self.m <= UNLIMITED_UP_TO:  # tiny solves: no BLAS thread waits, no limit
+            return self._checked_accelerations(t, q, qd)
         with self._threads():
-            t, q, qd = self._state(t, q, qd)
-            if not self.dense:
-                try:
-                    return self.solve(t, q, qd)
-                except ConstraintError:
-                    self.check_determined(t, q, qd)  # the precise error when M is the cause
-                    K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-                    A = dense_rows(K, self.n, t)  # redundant rows? (refused above REDUNDANT_DENSE)
-                    rows = independent_rows(A)
-                    if rows is None:
-                        raise
-                    warn(self.constraint_names, A, f"at t = {t:g}")
-                    return self._solve_kkt(K, forcing, -bias, t, rows=rows)
-            K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
-            full = inertia_test(K, t, self.n, self.m, self.coordinate_names)
-            rows = independent_rows(K[self.n :, : self.n]) if self.m else None
-            if rows is not None:  # redundant rows here: q̈ exact, λ minimum-norm
-                warn(self.constraint_names, K[self.n :, : self.n], f"at t = {t:g}")
-                return self._solve_kkt(K, forcing, -bias, t, full=full, rows=rows)
-            last = self._run_state["last"]
-            if not full and last is not None and last[0] == t and last[1] == q.tobytes():
-                if last[2] == qd.tobytes():  # the machine code solved this state with _kkt
-                    self._run_state["last"] = None
-                    return last[3][: self.n].copy(), last[3][self.n :].copy()
-            return self._solve_kkt(K, forcing, -bias, t, full=full)
+            return self._checked_accelerations(t, q, qd)
+
+    def _checked_accelerations(
+        self, t: float, q: object, qd: object
+    ) -> tuple[np.ndarray, np.ndarray]:
+        t, q, qd = self._state(t, q, qd)
+        if not self.dense:
+            try:
+                return self.solve(t, q, qd)
+            except ConstraintError:
+                self.check_determined(t, q, qd)  # the precise error when M is the cause
+                K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+                A = dense_rows(K, self.n, t)  # redundant rows? (refused above REDUNDANT_DENSE)
+                rows = independent_rows(A)
+                if rows is None:
+                    raise
+                warn(self.constraint_names, A, f"at t = {t:g}")
+                return self._solve_kkt(K, forcing, -bias, t, rows=rows)
+        K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+        full = inertia_test(K, t, self.n, self.m, self.coordinate_names)
+        rows = independent_rows(K[self.n :, : self.n]) if self.m else None
+        if rows is not None:  # redundant rows here: q̈ exact, λ minimum-norm
+            warn(self.constraint_names, K[self.n :, : self.n], f"at t = {t:g}")
+            return self._solve_kkt(K, forcing, -bias, t, full=full, rows=rows)
+        last = self._run_state["last"]
+        if not full and last is not None and last[0] == t and last[1] == q.tobytes():
+            if last[2] == qd.tobytes():  # the machine code solved this state with _kkt
+                self._run_state["last"] = None
+                return last[3][: self.n].copy(), last[3][self.n :].copy()
+        return self._solve_kkt(K, forcing, -bias, t, full=full)
 
     def check_determined(self, t: float, q: object, qd: object) -> None:
         """Check that M is positive definite on the admissible velocities at a state.

@@ -16,9 +16,10 @@ its parameter values; after that:
   SymEngine pickles it.
 
 Thread policy: dense solves of small systems must not wait on BLAS threads (on a busy 2-core
-machine a 10×10 solve with the default OpenBLAS threads took 5–15× longer). Every checked
-single-state call (:meth:`accelerations`) and every run (``simulate``, a sweep's batch) limits
-BLAS to one thread, once, through :func:`single_threaded`.
+machine a 10×10 solve with the default OpenBLAS threads took 5–15× longer). Every run
+(``simulate``, a sweep's batch) limits BLAS to one thread, once, through :func:`single_threaded`;
+a checked single-state call (:meth:`accelerations`) does so above
+:data:`pfaff.numeric.checked.UNLIMITED_UP_TO` unknowns only.
 """
 
 from __future__ import annotations
