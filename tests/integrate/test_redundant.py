@@ -156,3 +156,25 @@ def test_the_cli_reports_the_redundancy(tmp_path, capsys) -> None:
     assert main(["run", str(path)]) == 0
     text = capsys.readouterr().out
     assert "Redundant constraints" in text and "a, b" in text
+
+
+def test_a_run_with_inputs_reports_the_minimum_norm_multipliers() -> None:
+    """Inputs report states in one batched pass, except where the run's rows are redundant:
+    there λ is the minimum-norm one, as without inputs. Along x = y under the push u the rows
+    a = x − y, b = 2x − 2y carry λ_a + 2λ_b = −u/2, so λ = (−u/10, −u/5)."""
+    import sympy as sp
+
+    x, y = pfaff.coordinates("x y")
+    u = sp.Symbol("u")
+    s = pfaff.System([x, y])
+    s.add_particle(1, [x, y])
+    s.add_force([u, 0], at=[x, y])
+    s.add_input(u)
+    s.add_holonomic_constraint(x - y, name="a")
+    s.add_holonomic_constraint(2 * x - 2 * y, name="b")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pfaff.RedundancyWarning)
+        model = s.equations().compile({})
+        traj = pfaff.simulate(model, [0, 0], [0, 0], (0, 1), inputs={"u": 4.0}, t_eval=[0.5, 1.0])
+    np.testing.assert_allclose(traj.multipliers, [[-0.4, -0.8]] * 2, rtol=1e-12)
+    assert (traj.redundant_rows == 1).all()

@@ -15,10 +15,8 @@ constraint manifold (the Bricard linkage) is found at the first state of a run
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sps
 import symengine
 
@@ -27,8 +25,8 @@ from pfaff.derive.compile import build_model
 from pfaff.derive.compile_family import structured_model
 from pfaff.derive.equations import Derivation
 from pfaff.numeric.rank import DENSE_LIMIT, dependent_rows, null_basis, redundant_sets
+from pfaff.numeric.redundant import dependency_names, onto_positions
 
-NAMES_SHOWN = 8
 CONSISTENT = 1e-9  # a dependent row's residual on the manifold below this (relative): consistent
 
 
@@ -110,15 +108,13 @@ def _inconsistent(model: object, t: float, q: np.ndarray, rows: np.ndarray) -> n
     hol = np.asarray(model.holonomic, dtype=bool)  # type: ignore[attr-defined]
     qd = np.zeros(model.n)  # type: ignore[attr-defined]
     with np.errstate(all="ignore"):
-        for _ in range(12):  # Gauss–Newton on the position rows, minimum-norm steps
-            A = _dense(model.constraint_matrix(t, q))  # type: ignore[attr-defined]
-            f = np.where(hol, model.residual(t, q, qd)[0], 0.0)  # type: ignore[attr-defined]
-            if not np.all(np.isfinite(A)) or not np.all(np.isfinite(f)):
-                return np.zeros(0, dtype=np.int64)
-            if not hol.any() or np.abs(f).max() < 1e-14 * (1 + np.abs(q).max()):
-                break
-            step = scipy.linalg.lstsq(A[hol], f[hol], cond=1e-10, lapack_driver="gelsy")[0]
-            q = q - step
+        reached = onto_positions(
+            q, lambda q_: _dense(model.constraint_matrix(t, q_)),  # type: ignore[attr-defined]
+            lambda q_: model.residual(t, q_, qd)[0], hol, 12, 1e-14, 1e-10,  # type: ignore[attr-defined]
+        )  # fmt: skip
+        if reached is None:
+            return np.zeros(0, dtype=np.int64)
+        q = reached
         A = _dense(model.constraint_matrix(t, q))  # type: ignore[attr-defined]
         f, g = model.residual(t, q, qd)  # type: ignore[attr-defined]
     scale = 1.0 + np.abs(A).max() * (1 + np.abs(q).max())
@@ -167,10 +163,3 @@ def _engine_matrix(eom: Derivation, values: list, q: np.ndarray, tt: float) -> n
                 except (RuntimeError, TypeError, ValueError):  # not real, or not defined here
                     A[row, idx[a]] = np.nan
     return A
-
-
-def dependency_names(names: Sequence[str], rows: np.ndarray) -> str:
-    """The first few constraint names of ``rows`` in backticks, and a count of the rest."""
-    shown = ", ".join(f"`{names[int(i)]}`" for i in rows[:NAMES_SHOWN])
-    more = rows.size - NAMES_SHOWN
-    return shown + (f" and {more} more" if more > 0 else "")

@@ -166,9 +166,9 @@ class DrivenModel:
 
     def evaluate_states(self, t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> dict:
         """What a trajectory reports: the inputs' values per state, then all states at once
-        through the fused kernel (state by state where M is singular)."""
+        through the fused kernel (state by state where M is singular or rows are redundant)."""
         model = self._model
-        if len(t) and not model.mass_singular:
+        if len(t) and model._batched_states:
             params = [np.full(len(t), v) for v in self._p]
             for k in range(len(t)):
                 self.set(float(t[k]), q[k], qd[k])

@@ -349,7 +349,12 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         """Ȧq̇ + ḃ at an unchecked state, shape (m,): A q̈ = −(Ȧq̇ + ḃ) on a motion."""
         return np.asarray(self._kkt(t, q, qd)[3], dtype=float)
 
-    # ------------------------------------------------------------------ checked, for users
+    @property
+    def _batched_states(self) -> bool:
+        """Whether reported states go through the fused kernel in one batched, floored solve:
+        not where M is singular or the run's constraints are redundant (minimum-norm λ)."""
+        run = self._run_state
+        return self._fused is not None and not run["full"] and run["rows"] is None
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
@@ -369,11 +374,7 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         """
         t = np.asarray(t, dtype=float)
         q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
-        if (
-            self._fused is not None
-            and not self._run_state["full"]
-            and self._run_state["rows"] is None
-        ):
+        if self._batched_states:
             try:
                 return fused_states(self, t, q, qd)
             except (np.linalg.LinAlgError, ConstraintError):

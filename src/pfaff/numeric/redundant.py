@@ -21,8 +21,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse as sps
 
-from pfaff.core.errors import RedundancyWarning
+from pfaff.core.errors import ConstraintError, RedundancyWarning
 from pfaff.numeric.rank import null_basis, redundant_sets
 
 _geqp3 = scipy.linalg.lapack.dgeqp3  # pivoted QR without scipy.linalg.qr's checks (µs per call)
@@ -75,10 +76,25 @@ def min_norm_multipliers(A: np.ndarray, rows: np.ndarray, lam_rows: np.ndarray) 
     return scipy.linalg.lstsq(A.T, force, cond=RANK_TOL)[0]
 
 
+NAMES_SHOWN = 8
+
+
+def dependency_names(names: Sequence[str], rows: np.ndarray) -> str:
+    """The first few constraint names of ``rows`` in backticks, and a count of the rest.
+
+    Examples
+    --------
+    >>> dependency_names(["a", "b", "c"], np.array([0, 2]))
+    '`a`, `c`'
+    """
+    shown = ", ".join(f"`{names[int(i)]}`" for i in rows[:NAMES_SHOWN])
+    more = rows.size - NAMES_SHOWN
+    return shown + (f" and {more} more" if more > 0 else "")
+
+
 def describe(names: Sequence[str], A: np.ndarray) -> str:
     """The sets of rows that depend on one another at A, by name (for messages)."""
-    sets = redundant_sets(A)
-    return "; ".join(", ".join(f"`{names[i]}`" for i in s[:8]) for s in sets)
+    return "; ".join(dependency_names(names, np.asarray(s)) for s in redundant_sets(A))
 
 
 def warn(names: Sequence[str], A: np.ndarray, where: str) -> None:
@@ -104,8 +120,8 @@ def persistent(
     """Whether the rank deficiency of A0 at q0 persists at two nearby consistent states.
 
     The states: q0 ± PROBE (1 + |q0|) v along a fixed admissible direction v (a unit vector of
-    null(A_I)), brought back onto the position rows by Gauss–Newton on the independent rows
-    (minimum-norm steps). ``matrix(q)`` gives A, ``residual(q)`` f at q.
+    null(A_I)), brought back onto the position rows by :func:`onto_positions`. ``matrix(q)``
+    gives A, ``residual(q)`` f at q.
     """
     k0 = A0.shape[0] - rows.size
     Z = scipy.linalg.null_space(A0[rows])
@@ -115,31 +131,50 @@ def persistent(
     v /= np.linalg.norm(v)
     h = PROBE * (1.0 + np.abs(q0).max())
     for sign in (1.0, -1.0):
-        q = q0 + sign * h * v
-        for _ in range(20):
-            A = matrix(q)
-            f = np.where(holonomic, residual(q), 0.0)
-            if not (np.isfinite(A).all() and np.isfinite(f).all()):
-                return False
-            keep = holonomic.copy()
-            step = scipy.linalg.lstsq(A[keep], f[keep], cond=RANK_TOL)[0] if keep.any() else 0.0
-            q = q - step
-            if np.abs(f).max(initial=0.0) < 1e-13 * (1.0 + np.abs(q).max()):
-                break
+        q = onto_positions(q0 + sign * h * v, matrix, residual, holonomic, 20, 1e-13, RANK_TOL)
+        if q is None:
+            return False
         found = independent_rows(matrix(q))
         if found is None or A0.shape[0] - found.size != k0:
             return False
     return True
 
 
+def onto_positions(
+    q: np.ndarray,
+    matrix: Callable[[np.ndarray], np.ndarray],
+    residual: Callable[[np.ndarray], np.ndarray],
+    holonomic: np.ndarray,
+    iterations: int,
+    stop: float,
+    cond: float,
+) -> np.ndarray | None:
+    """q brought onto the position rows f = 0 by Gauss–Newton with minimum-norm steps (least
+    squares with the singular-value cutoff ``cond``: dependent rows allowed), until max |f| <
+    ``stop`` (1 + max |q|) or ``iterations`` steps; None where A or f is not finite.
+
+    Examples
+    --------
+    >>> q = onto_positions(np.array([0.3, 0.4]), lambda q: 2 * q[None, :],
+    ...                    lambda q: np.array([q @ q - 1.0]), np.array([True]), 20, 1e-14, 1e-10)
+    >>> round(float(q @ q), 12)
+    1.0
+    """
+    for _ in range(iterations):
+        A = matrix(q)
+        f = np.where(holonomic, residual(q), 0.0)
+        if not (np.isfinite(A).all() and np.isfinite(f).all()):
+            return None
+        if not holonomic.any() or np.abs(f).max() < stop * (1.0 + np.abs(q).max()):
+            break
+        q = q - scipy.linalg.lstsq(A[holonomic], f[holonomic], cond=cond, lapack_driver="gelsy")[0]
+    return q
+
+
 def dense_rows(K: object, n: int, t: float) -> np.ndarray:
     """A of an augmented matrix K (dense or sparse) as a dense array, for the redundancy test;
     a sparse model above :data:`REDUNDANT_DENSE` unknowns is refused (its rows are not
     searched)."""
-    import scipy.sparse as sps
-
-    from pfaff.core.errors import ConstraintError
-
     if not sps.issparse(K):
         return np.asarray(K)[n:, :n]
     if K.shape[0] > REDUNDANT_DENSE:  # type: ignore[attr-defined]

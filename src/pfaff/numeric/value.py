@@ -35,8 +35,6 @@ import numpy as np
 from pfaff.core.errors import ModelTypeError, OptionError, ParameterError
 from pfaff.numeric.checks import real_number
 
-_RUN_KEYS = ("full", "rho", "last", "live")
-
 
 @functools.cache
 def _controller() -> Any:
