@@ -268,18 +268,32 @@ class StreamModel(Quantities, ModelValue):
     ) -> tuple[np.ndarray, np.ndarray | None]:
         mvals, f = self._dynamics(t, q, qd)
         avals, bias = self._accel_constraints(t, q, qd)
-        zero = all(np.ndim(b) == 0 and b == 0 for b in bias)
-        c = None if zero else -self._rows_vector(bias)
+        view, solved_avals, solved_bias = self._solved_rows(avals, bias)
+        zero = all(np.ndim(b) == 0 and b == 0 for b in solved_bias)
+        c = None if zero else -view._rows_vector(solved_bias)
         if alpha or beta:
             fr, g = self.residual(t, q, qd)
-            c = (np.zeros(self.m) if c is None else c) - 2 * alpha * g - beta**2 * fr
+            mv = view.m  # (a left-out row is the last one)
+            c = (np.zeros(mv) if c is None else c) - 2 * alpha * g[:mv] - beta**2 * fr[:mv]
         self.stats["kkt_solves"] += 1
-        solved = self._solver.solve(
-            self._system(mvals, f, avals, c), out=out, multipliers=multipliers
+        qdd, lam = self._solver.solve(
+            view._system(mvals, f, solved_avals, c), out=out, multipliers=multipliers
         )
         if isinstance(self._solver, SparseSolver):
             self.stats["fill"] = self._solver.fill
-        return solved
+        if multipliers and lam is not None and view is not self:
+            lam = self._all_multipliers(lam, avals)
+        return qdd, lam
+
+    def _solved_rows(self, avals: list, bias: list) -> tuple[StreamModel, list, list]:
+        """The model whose rows the solve uses and their entries: this one and all of them (a
+        family model may leave out a row that depends on the others,
+        :class:`pfaff.numeric.structured.StructuredModel`)."""
+        return self, avals, bias
+
+    def _all_multipliers(self, lam: np.ndarray, avals: list) -> np.ndarray:
+        """λ over every row from the solved rows' λ (where :meth:`_solved_rows` left one out)."""
+        return lam
 
     def _system(self, mvals: list, f: np.ndarray, avals: list, c: np.ndarray | None) -> KKTSystem:
         """The KKT system in the solver's form: streams, or K assembled for SuperLU."""

@@ -26,7 +26,6 @@ import scipy.sparse.linalg as spla
 
 from pfaff.core.errors import ModelError
 from pfaff.numeric.base import StreamModel
-from pfaff.numeric.kkt import KKTSystem
 from pfaff.numeric.parts import ConStreams, DynStreams
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.solvers import check, family_solver, names
@@ -122,36 +121,18 @@ class StructuredModel(StreamModel):
         return super()._unpickled() | {"_plan", "_solver", "_drop", "_view"}
 
     # ------------------------------------------------------------------ a dropped row
-    def _solve(
-        self,
-        t: float,
-        q: np.ndarray,
-        qd: np.ndarray,
-        alpha: float = 0.0,
-        beta: float = 0.0,
-        out: np.ndarray | None = None,
-        multipliers: bool = True,
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """The base solve; where the structure drops a redundant row (the closed ring's last
-        spacing), the others' solve, λ = 0 on it and then the minimum-norm λ over all rows."""
-        if self.__dict__.get("_drop") is None:
-            return super()._solve(t, q, qd, alpha, beta, out, multipliers)
-        view, d = self._view, self._drop
-        mvals, f = self._dynamics(t, q, qd)
-        avals, bias = self._accel_constraints(t, q, qd)
+    def _solved_rows(self, avals: list, bias: list) -> tuple[StreamModel, list, list]:
+        """Where the structure drops a redundant row (the closed ring's last spacing), the
+        others: the view the triangular plan was made for."""
+        d = self.__dict__.get("_drop")
+        if d is None:
+            return self, avals, bias
         keep = [i for i in range(len(self.con)) if i != d]
-        c = -view._rows_vector([bias[i] for i in keep])
-        if alpha or beta:
-            fr, g = self.residual(t, q, qd)
-            c = c - 2 * alpha * g[:-1] - beta**2 * fr[:-1]
-        self.stats["kkt_solves"] += 1
-        qdd, lam = self._solver.solve(
-            KKTSystem(f, c, mvals=mvals, avals=[avals[i] for i in keep]), out=out,
-            multipliers=multipliers,
-        )  # fmt: skip
-        if not multipliers or lam is None:
-            return qdd, lam
-        return qdd, _minimum_norm(self._jacobian(avals), np.append(lam, 0.0), self.p)
+        return self._view, [avals[i] for i in keep], [bias[i] for i in keep]
+
+    def _all_multipliers(self, lam: np.ndarray, avals: list) -> np.ndarray:
+        """λ = 0 on the dropped row, then the minimum-norm λ over all rows (same Aᵀλ)."""
+        return _minimum_norm(self._jacobian(avals), np.append(lam, 0.0), self.p)
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray
