@@ -30,6 +30,7 @@ from pfaff.core.events import Event, EventRecord
 from pfaff.core.symbols import coordinates, t
 from pfaff.derive.work import ForceWork
 from pfaff.integrate.initial import consistent_state
+from pfaff.integrate.sensitivity import sensitivities
 from pfaff.integrate.simulation import simulate
 from pfaff.integrate.stepper import Stepper, StepperOptions
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
@@ -78,6 +79,7 @@ __all__ = [
     "from_sympy",
     "load_model",
     "load_urdf",
+    "sensitivities",
     "models",
     "root_locus",
     "simulate",
