@@ -47,7 +47,7 @@ def test_model_events_refused():
     s = pfaff.models.pendulum()
     s.add_event(s.coordinates[0], name="bottom")
     model = s.equations().compile(PEND)
-    with pytest.raises(OptionError, match="saltation matrix.*bottom"):
+    with pytest.raises(OptionError, match=r"saltation matrix.*bottom"):
         pfaff.sensitivities(model, [0.1], [0.0], (0, 1), parameters=["g"])
 
 
@@ -56,7 +56,7 @@ def test_redundant_rows():
     variational solve), ∂λ/∂L refused since λ itself is not determined."""
     s = pfaff.models.cartesian_pendulum()
     x, y = s.coordinates
-    L = [p for p in s.equations().parameters if p.name == "L"][0]
+    L = next(p for p in s.equations().parameters if p.name == "L")
     s.add_holonomic_constraint(2 * (x**2 + y**2 - L**2), name="rod again")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pfaff.RedundancyWarning)
@@ -71,4 +71,4 @@ def test_redundant_rows():
     assert np.allclose(run.sensitivity, ref.sensitivity, rtol=1e-8, atol=1e-9)
     assert ref.multiplier_sensitivity.shape == (3, 1, 2)
     with pytest.raises(ConstraintError, match="redundant"):
-        run.multiplier_sensitivity
+        _ = run.multiplier_sensitivity
