@@ -12,6 +12,7 @@ The package is laid out by pipeline stage, imports going only downward (see ARCH
 
 from pfaff import attitude, models
 from pfaff.api import EquationsOfMotion, RootLocus, Solution, System, root_locus
+from pfaff.api.fit import FitResult, fit
 from pfaff.api.fromsympy import from_sympy
 from pfaff.core.errors import (
     BodyInertiaError,
@@ -51,6 +52,7 @@ __all__ = [
     "EulerAngles",
     "Event",
     "EventRecord",
+    "FitResult",
     "ForceWork",
     "InertiaError",
     "Linearization",
@@ -75,6 +77,7 @@ __all__ = [
     "Trajectory",
     "attitude",
     "consistent_state",
+    "fit",
     "coordinates",
     "from_sympy",
     "load_model",

@@ -21,6 +21,7 @@ from pfaff.integrate.simulation import _span, simulate
 from pfaff.numeric.checks import check_model, real_vector
 from pfaff.numeric.redundant import independent_rows
 from pfaff.numeric.structured import StructuredModel
+from pfaff.numeric.value import single_threaded
 from pfaff.results.sensitivity import SensitivityTrajectory
 
 FD_STEP = 1e-3  # relative step of the derivatives of a callable q0(p), qd0(p)
@@ -153,8 +154,8 @@ def sensitivities(
     The variational equations (:mod:`pfaff.derive.variational`: ∂/∂q, ∂/∂q̇, ∂/∂p of M, h, Q,
     A, b, generated on the first call for these parameters through the model's linearizer
     factory; nothing at ``compile()``) are integrated with the state by the projection method:
-    DOP853 on [q, q̇, S] with the step sizes chosen on the state alone, the KKT system's
-    factorization shared by q̈, λ and their derivatives. After every step the state is
+    DOP853 on [q, q̇, S] with the step sizes chosen on the state alone (the sensitivities are
+    left out of the error control), one LU factorization of the KKT matrix shared by q̈, λ and their derivatives. After every step the state is
     projected as by ``simulate(method="projection")`` and the sensitivities onto the tangent of
     the constraint manifold at the projected state: the smallest Euclidean correction giving
     f_q S_q + f_p = 0 (holonomic rows) and V_q S_q + A S_v + V_p = 0 (every row, V = A q̇ + b).
@@ -167,7 +168,9 @@ def sensitivities(
         The initial state, or functions of the dict of the model's parameter values returning
         it (a start that moves with the parameters, e.g. a configuration recompleted per wheel
         radius); their derivatives are taken by fourth-order central differences of relative
-        step 1e-3 (truncation about 1e-12).
+        step 1e-3 (truncation about 1e-12). A fixed start is not moved with the parameters;
+        where a constraint moves with one, the start's sensitivity is the smallest correction
+        onto the moved manifold.
     t_span : (float, float)
     parameters : sequence of str
         Names of the parameters differentiated by (columns in this order).
@@ -212,6 +215,12 @@ def sensitivities(
     """
     _model_checked(model)
     _options_checked(options)
+    with single_threaded():  # (tiny LAPACK calls: threads cost more than they give)
+        return _sensitivities(model, q0, qd0, t_span, parameters, initial, independent, options)
+
+
+def _sensitivities(model, q0, qd0, t_span, parameters, initial, independent, options):
+    """:func:`sensitivities` once the model and options are checked."""
     if not isinstance(initial, bool):
         raise OptionError(f"`initial` must be True or False; got {initial!r:.60}")
     idx = parameter_indices(model, parameters)

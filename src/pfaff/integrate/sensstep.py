@@ -2,10 +2,10 @@
 
 The state y = [q, q̇] is integrated with the sensitivity matrices S = [S_q; S_v] (2n, k):
 ``AugmentedField`` solves the KKT system once per evaluation for q̈ and λ and once more, with the
-same factorization, for ∂q̈/∂p and ∂λ/∂p (the variational equations of
+same LU factorization, for ∂q̈/∂p and ∂λ/∂p (the variational equations of
 :mod:`pfaff.derive.variational`). ``SensitivityRK`` is DOP853 on [y, vec S] whose error estimate
-reads the state only (the sensitivities do not change the step sizes: the steps are those of a
-plain run), and after every accepted step projects the state like ``"projection"`` and the
+reads the state only (the sensitivities are left out of the step-size control: the steps are
+chosen as a plain run's), and after every accepted step projects the state like ``"projection"`` and the
 sensitivities onto the tangent of the constraint manifold at the projected state
 (:func:`tangent_project`).
 """
@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from scipy.integrate import DOP853
+from scipy.linalg.lapack import dgetrf, dgetrs
 
 from pfaff.core.errors import OptionError
 from pfaff.derive.variational import VariationalKernel
@@ -79,6 +79,7 @@ class AugmentedField:
         self.k = setup.S0.shape[1]
         n, m = self.n, self.m
         self.x = np.concatenate(([0.0], np.zeros(3 * n + m), p))
+        self.K = np.zeros((n + len(self.keep),) * 2)  # [[M, Aᵀ], [A, 0]] on the kept rows
         self.nfev = 0
 
     def solve(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
@@ -89,11 +90,14 @@ class AugmentedField:
         x[1 + 2 * n : 1 + 3 * n + m] = 0.0
         M, A, E, G = self.kernel.values(x)
         Ak = A[keep]
-        c = len(keep)
-        K = np.zeros((n + c, n + c))
+        K, c = self.K, len(keep)
         K[:n, :n], K[:n, n:], K[n:, :n] = M, Ak.T, Ak
-        lu = scipy.linalg.lu_factor(K, check_finite=False)
-        sol = scipy.linalg.lu_solve(lu, -np.concatenate((E[:, 0], G[keep, 0])), check_finite=False)
+        lu, piv, info = dgetrf(K)  # LAPACK directly: one factorization for both solves
+        if info > 0:
+            raise np.linalg.LinAlgError(
+                f"the KKT matrix of the sensitivities is singular at t = {t:.17g}"
+            )
+        sol = dgetrs(lu, piv, -np.concatenate((E[:, 0], G[keep, 0])))[0]
         lam = np.zeros(m)
         lam[keep] = -sol[n:]
         x[1 + 2 * n : 1 + 3 * n] = sol[:n]
@@ -106,7 +110,7 @@ class AugmentedField:
         rhs[:n, :r] += E_p
         rhs[n:] = (G_q[keep] @ Sq) + (G_qd[keep] @ Sv)
         rhs[n:, :r] += G_p[keep]
-        Z = scipy.linalg.lu_solve(lu, -rhs, check_finite=False)
+        Z = dgetrs(lu, piv, -rhs)[0]
         S_lam = np.zeros((m, k))
         S_lam[keep] = -Z[n:]
         return sol[:n], Z[:n], S_lam, lam
