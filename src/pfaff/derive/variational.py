@@ -24,13 +24,22 @@ if TYPE_CHECKING:
     from pfaff.derive.linearize import CompiledLinearizer, LinearForms
 
 
+def _kkt_exprs(forms: LinearForms) -> list:
+    """[[M, Aᵀ], [A, 0]] and [E; G], flattened row by row."""
+    n, m = forms.n, forms.m
+    K = [[*forms.M[i], *(forms.A[k][i] for k in range(m))] for i in range(n)]
+    K += [[*forms.A[k], *([0] * m)] for k in range(m)]
+    return [e for row in K for e in row] + [*forms.E, *forms.G]
+
+
 def _rate_exprs(forms: LinearForms, params: tuple[int, ...]) -> list:
-    """E_q, E_qd, E_p, G_q, G_qd, G_p, flattened row by row."""
+    """[E_q, E_qd, E_p; G_q, G_qd, G_p], flattened row by row."""
     jac = forms.jacobians
     ps = [forms.params[i] for i in params]
     out: list = []
     for name, exprs in (("E", forms.E), ("G", forms.G)):
-        for rows in (jac[f"{name}_q"], jac[f"{name}_qd"], forms._jac(exprs, ps)):
+        blocks = (jac[f"{name}_q"], jac[f"{name}_qd"], forms._jac(exprs, ps))
+        for rows in zip(*blocks, strict=True):
             out += [e for row in rows for e in row]
     return out
 
@@ -73,8 +82,8 @@ class VariationalKernel:
     >>> eom = pfaff.models.pendulum().equations()
     >>> kernel = variational_kernel(eom.compile({"L": 2.0, "g": 9.81, "m": 1.0}).linearizer, (0,))
     >>> x = np.array([0.0, 0.5, 0.0, 0.0, 2.0, 9.81, 1.0])  # t, θ, θ̇, θ̈, L, g, m
-    >>> E_p = kernel.rates(x)[2]  # ∂(m L² θ̈ + m g L sin θ)/∂L = m g sin θ at θ̈ = 0
-    >>> bool(np.isclose(E_p[0, 0], 9.81 * np.sin(0.5)))
+    >>> E_p = kernel.rates(x)[0, 2]  # ∂(m L² θ̈ + m g L sin θ)/∂L = m g sin θ at θ̈ = 0
+    >>> bool(np.isclose(E_p, 9.81 * np.sin(0.5)))
     True
     """
 
@@ -83,22 +92,21 @@ class VariationalKernel:
         n, m, r, h = forms.n, forms.m, len(params), len(forms.hol)
         self.n, self.m, self.n_p = n, m, r
         self.holonomic_rows = list(forms.hol)
-        self._values = factory.function("values")
+        self._kkt = factory.generated("kkt", _kkt_exprs)
         self._rates = factory.generated(("rates", params), lambda f: _rate_exprs(f, params))
         self._tangent = factory.generated(("tangent", params), lambda f: _tangent_exprs(f, params))
-        self._value_shapes = [(n, n), (m, n), (n, 1), (m, 1)]
-        self._rate_shapes = [(n, n), (n, n), (n, r), (m, n), (m, n), (m, r)]
         self._tangent_shapes = [(m, n), (m, n), (m, r), (h, r)]
 
-    def values(self, x: np.ndarray) -> list[np.ndarray]:
-        """[M (n, n), A (m, n), E (n, 1), G (m, 1)] at x."""
-        flat = np.asarray(self._values(x), dtype=float).ravel()
-        return _split(flat, self._value_shapes)
+    def kkt(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """K = [[M, Aᵀ], [A, 0]] (n + m, n + m) and [E; G] (n + m,) at x."""
+        flat = np.asarray(self._kkt(x), dtype=float).ravel()
+        s = self.n + self.m
+        return flat[: s * s].reshape(s, s), flat[s * s :]
 
-    def rates(self, x: np.ndarray) -> list[np.ndarray]:
-        """[E_q, E_qd (n, n), E_p (n, n_p), G_q, G_qd (m, n), G_p (m, n_p)] at x."""
+    def rates(self, x: np.ndarray) -> np.ndarray:
+        """[[E_q, E_qd, E_p], [G_q, G_qd, G_p]] at x, shape (n + m, 2n + n_p)."""
         flat = np.asarray(self._rates(x), dtype=float).ravel()
-        return _split(flat, self._rate_shapes)
+        return flat.reshape(self.n + self.m, 2 * self.n + self.n_p)
 
     def tangent(self, x: np.ndarray) -> list[np.ndarray]:
         """[A (m, n), V_q (m, n), V_p (m, n_p), f_p (h, n_p)] at x (q̈, λ not used)."""

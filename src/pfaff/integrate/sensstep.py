@@ -74,53 +74,55 @@ class AugmentedField:
 
     def __init__(self, setup: SensitivitySetup, p: np.ndarray) -> None:
         kern = setup.kernel
-        self.kernel, self.keep = kern, setup.keep
-        self.n, self.m, self.r = kern.n, kern.m, kern.n_p
-        self.k = setup.S0.shape[1]
-        n, m = self.n, self.m
+        self.kernel = kern
+        self.n, self.m, self.r = n, m, r = kern.n, kern.m, kern.n_p
+        self.k = k = setup.S0.shape[1]
+        keep = np.asarray(setup.keep)
+        # the rows of the KKT system solved: [q̈ rows, kept constraint rows] (all: a slice)
+        self.rows = slice(None) if len(keep) == m else np.concatenate((np.arange(n), n + keep))
+        self.keep = keep
         self.x = np.concatenate(([0.0], np.zeros(3 * n + m), p))
-        self.K = np.zeros((n + len(self.keep),) * 2)  # [[M, Aᵀ], [A, 0]] on the kept rows
+        # [S_q; S_v; P]: P (n_p, k) the identity on the parameters' columns (the ∂/∂p terms)
+        self.ext = np.zeros((2 * n + r, k))
+        self.ext[2 * n :, :r] = np.eye(r)
         self.nfev = 0
 
     def solve(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
         """q̈ (n,), S_a (n, k), S_λ (m, k) at (t, y) and λ (m,)."""
-        n, m, r, k, x, keep = self.n, self.m, self.r, self.k, self.x, self.keep
+        n, m, k, x, rows = self.n, self.m, self.k, self.x, self.rows
         x[0] = t
         x[1 : 1 + 2 * n] = y[: 2 * n]
         x[1 + 2 * n : 1 + 3 * n + m] = 0.0
-        M, A, E, G = self.kernel.values(x)
-        Ak = A[keep]
-        K, c = self.K, len(keep)
-        K[:n, :n], K[:n, n:], K[n:, :n] = M, Ak.T, Ak
+        K, EG = self.kernel.kkt(x)
+        if m != len(self.keep):
+            K, EG = K[np.ix_(rows, rows)], EG[rows]
         lu, piv, info = dgetrf(K)  # LAPACK directly: one factorization for both solves
         if info > 0:
             raise np.linalg.LinAlgError(
                 f"the KKT matrix of the sensitivities is singular at t = {t:.17g}"
             )
-        sol = dgetrs(lu, piv, -np.concatenate((E[:, 0], G[keep, 0])))[0]
+        sol = dgetrs(lu, piv, -EG)[0]
         lam = np.zeros(m)
-        lam[keep] = -sol[n:]
+        lam[self.keep] = -sol[n:]
         x[1 + 2 * n : 1 + 3 * n] = sol[:n]
         x[1 + 3 * n : 1 + 3 * n + m] = lam
-        E_q, E_qd, E_p, G_q, G_qd, G_p = self.kernel.rates(x)
-        S = y[2 * n :].reshape(2 * n, k)
-        Sq, Sv = S[:n], S[n:]
-        rhs = np.empty((n + c, k))
-        rhs[:n] = E_q @ Sq + E_qd @ Sv
-        rhs[:n, :r] += E_p
-        rhs[n:] = (G_q[keep] @ Sq) + (G_qd[keep] @ Sv)
-        rhs[n:, :r] += G_p[keep]
-        Z = dgetrs(lu, piv, -rhs)[0]
+        J = self.kernel.rates(x)
+        ext = self.ext
+        ext[: 2 * n] = y[2 * n :].reshape(2 * n, k)
+        Z = dgetrs(lu, piv, -(J[rows] @ ext))[0]
         S_lam = np.zeros((m, k))
-        S_lam[keep] = -Z[n:]
+        S_lam[self.keep] = -Z[n:]
         return sol[:n], Z[:n], S_lam, lam
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
         self.nfev += 1
-        n = self.n
+        n, k = self.n, self.k
         qdd, Sa, _, _ = self.solve(t, y)
-        Sv = y[2 * n :].reshape(2 * n, self.k)[n:]
-        return np.concatenate((y[n : 2 * n], qdd, Sv.ravel(), Sa.ravel()))
+        out = np.empty_like(y)
+        out[:n], out[n : 2 * n] = y[n : 2 * n], qdd
+        S = out[2 * n :].reshape(2 * n, k)
+        S[:n], S[n:] = y[2 * n :].reshape(2 * n, k)[n:], Sa
+        return out
 
 
 class _StateDOP853(DOP853):
