@@ -78,7 +78,7 @@ def bicycle_rows(repeats: int) -> list:
     bike = pfaff.models.whipple_bicycle()
     values = dict(pfaff.models.MEIJAARD)
     model = bike.equations().compile(values)
-    q0, qd0 = bicycle_state(values, speed=4.6, lean=0.05)
+    q0, qd0 = bicycle_state(values, speed=4.6, phi=0.05, delta=0.02)
     return compare(model, q0, qd0, 2.0, {2: ["rR", "c"]}, repeats, False)
 
 
