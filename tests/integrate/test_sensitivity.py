@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from central_differences import close, converged, stencil
 
 import pfaff
 from pfaff.models import damped_double_pendulum
@@ -30,24 +31,6 @@ def angles_model():
 @pytest.fixture(scope="module")
 def cartesian_model():
     return damped_double_pendulum(cartesian=True).equations().compile(VALUES)
-
-
-def stencil(f, x0: float, h: float) -> np.ndarray:
-    """Fourth-order central difference of f at x0 with step h."""
-    a, b, c, d = (f(x0 + s * h) for s in (-2, -1, 1, 2))
-    return (a - 8 * b + 8 * c - d) / (12 * h)
-
-
-def converged(f, x0: float) -> np.ndarray:
-    """The central difference with relative step 1e-3, checked against the one with 2e-3."""
-    h = 1e-3 * max(1.0, abs(x0))
-    d1, d2 = stencil(f, x0, h), stencil(f, x0, 2 * h)
-    assert np.abs(d1 - d2).max() <= 2e-7 * np.abs(d1).max()  # well inside the 1e-6 compared
-    return d1
-
-
-def close(exact: np.ndarray, reference: np.ndarray, rel: float = 1e-6) -> bool:
-    return bool(np.abs(exact - reference).max() <= rel * np.abs(reference).max())
 
 
 def end_q(model, q0, qd0, **values) -> np.ndarray:

@@ -29,6 +29,7 @@ def cartesian():
         ({"inputs": {"g": 1.0}}, "`inputs` are not supported"),
         ({"initial": True}, "needs `independent`"),
         ({"initial": 1}, "`initial` must be True or False"),
+        ({"integrator": "RK45"}, "`integrator`='DOP853' only"),
     ],
 )
 def test_refused_options(cartesian, kw, match):
@@ -72,3 +73,17 @@ def test_redundant_rows():
     assert ref.multiplier_sensitivity.shape == (3, 1, 2)
     with pytest.raises(ConstraintError, match="redundant"):
         _ = run.multiplier_sensitivity
+
+
+def test_mrp_switch_ends_the_run():
+    """A spin about z passes |σ| = 1 at half a turn: the shadow-set switch restarts the
+    integrator in other coordinates, which the sensitivities cannot follow: status "failed"."""
+    s = pfaff.models.torque_free_body("mrp")
+    model = s.equations().compile({"I1": 1.0, "I2": 2.0, "I3": 3.0})
+    att = s.bodies[0].attitude
+    q0 = att.from_dcm(np.eye(3))
+    qd0 = att.rates(q0, [0.0, 0.0, 2.0])
+    run = pfaff.sensitivities(model, q0, qd0, (0, 3), parameters=["I3"])
+    assert run.status == "failed"
+    assert "MRP shadow-set switch" in run.message
+    assert run.t[-1] < 3.0

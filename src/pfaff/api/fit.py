@@ -314,8 +314,8 @@ def fit(
     >>> import numpy as np, pfaff
     >>> truth = {"m": 1.0, "l": 0.8, "g": 9.81, "c": 0.05}
     >>> model = pfaff.models.damped_pendulum().equations().compile(truth)
-    >>> t = np.linspace(0, 3, 31)
-    >>> data = pfaff.simulate(model, [0.5], [0.0], (0, 3), t_eval=t).q
+    >>> t = np.linspace(0, 2, 21)
+    >>> data = pfaff.simulate(model, [0.5], [0.0], (0, 2), t_eval=t).q
     >>> guess = model.with_parameters({"c": 0.1, "l": 1.0})
     >>> res = pfaff.fit(guess, t, data, {"c": 0.1, "l": 1.0}, ["theta"], [0.5], [0.0])
     >>> res.status, round(res.estimates["c"], 6), round(res.estimates["l"], 6)

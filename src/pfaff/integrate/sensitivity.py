@@ -49,6 +49,11 @@ def _options_checked(options: dict) -> None:
             f"sensitivities integrate with method='projection' only; got `method`={method!r:.60}"
         )
     options.pop("method", None)
+    if options.get("integrator", "DOP853") != "DOP853":
+        raise OptionError(
+            "sensitivities integrate with `integrator`='DOP853' only; got "
+            f"{options['integrator']!r:.60}"
+        )
     if options.get("events"):
         raise OptionError(
             "sensitivities of runs with events or impacts are not supported: pass no `events`"

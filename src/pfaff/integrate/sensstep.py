@@ -19,7 +19,6 @@ import numpy as np
 from scipy.integrate import DOP853
 from scipy.linalg.lapack import dgetrf, dgetrs
 
-from pfaff.core.errors import OptionError
 from pfaff.derive.variational import VariationalKernel
 from pfaff.integrate.integrators import ProjectedRK
 from pfaff.integrate.stepper import Power, StepperOptions, _RunFailure
@@ -158,8 +157,6 @@ class SensitivityRK(ProjectedRK):
                 "sensitivities cannot follow a restart of the integrator (an MRP shadow-set "
                 "switch changes the coordinates); use another attitude set"
             )
-        if options.integrator != "DOP853":
-            raise OptionError("sensitivities integrate with `integrator`='DOP853' only")
         setup.stepper = self
         p = np.array(list(model.parameters.values()), dtype=float)
         self.field = AugmentedField(setup, p)
