@@ -75,6 +75,7 @@ def test_redundant_rows():
         _ = run.multiplier_sensitivity
 
 
+@pytest.mark.slow
 def test_mrp_switch_ends_the_run():
     """A spin about z passes |σ| = 1 at half a turn: the shadow-set switch restarts the
     integrator in other coordinates, which the sensitivities cannot follow: status "failed"."""
