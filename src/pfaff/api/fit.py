@@ -201,7 +201,18 @@ def _bounds(bounds: object, unknowns: list) -> tuple[np.ndarray, np.ndarray]:
 class _Problem:
     """Residuals and Jacobian of one fit, from one run with sensitivities per θ."""
 
-    def __init__(self, model, unknowns, obs, ts, y, w, q0, qd0, options) -> None:
+    def __init__(
+        self,
+        model: Any,
+        unknowns: list[tuple[str, str, int, float]],
+        obs: Observation,
+        ts: np.ndarray,
+        y: np.ndarray,
+        w: np.ndarray,
+        q0: object,
+        qd0: object,
+        options: dict,
+    ) -> None:
         self.model, self.unknowns, self.obs = model, unknowns, obs
         self.ts, self.y, self.w = ts, y, w
         self.q0, self.qd0, self.options = q0, qd0, options

@@ -23,6 +23,7 @@ from pfaff.numeric.redundant import independent_rows
 from pfaff.numeric.structured import StructuredModel
 from pfaff.numeric.value import single_threaded
 from pfaff.results.sensitivity import SensitivityTrajectory
+from pfaff.results.trajectory import Trajectory
 
 FD_STEP = 1e-3  # relative step of the derivatives of a callable q0(p), qd0(p)
 
@@ -224,7 +225,16 @@ def sensitivities(
         return _sensitivities(model, q0, qd0, t_span, parameters, initial, independent, options)
 
 
-def _sensitivities(model, q0, qd0, t_span, parameters, initial, independent, options):
+def _sensitivities(
+    model: Any,
+    q0: object,
+    qd0: object,
+    t_span: tuple[float, float],
+    parameters: Sequence[str],
+    initial: bool,
+    independent: Sequence[str | int] | None,
+    options: dict,
+) -> SensitivityTrajectory:
     """:func:`sensitivities` once the model and options are checked."""
     if not isinstance(initial, bool):
         raise OptionError(f"`initial` must be True or False; got {initial!r:.60}")
@@ -255,7 +265,14 @@ def _sensitivities(model, q0, qd0, t_span, parameters, initial, independent, opt
     return _report(traj, setup, p, initial, [list(model.parameters)[i] for i in idx], rows)
 
 
-def _report(traj, setup: SensitivitySetup, p, initial: bool, pnames: list[str], rows):
+def _report(
+    traj: Trajectory,
+    setup: SensitivitySetup,
+    p: np.ndarray,
+    initial: bool,
+    pnames: list[str],
+    rows: np.ndarray | None,
+) -> SensitivityTrajectory:
     """The trajectory with the recorded sensitivities, projected at its reported states, and
     the multipliers' sensitivities solved there."""
     n, m, k = setup.kernel.n, setup.kernel.m, setup.S0.shape[1]
