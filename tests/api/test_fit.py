@@ -109,3 +109,22 @@ def test_plot_writes_a_figure(model, tmp_path):
     res.plot(tmp_path / "fit.png")
     assert (tmp_path / "fit.png").stat().st_size > 1000
     assert set(res.to_dict()) >= {"estimates", "standard_errors", "status", "message"}
+
+
+def test_observed_expression_refusals(model):
+    theta = model.linearizer.coordinates[0]
+    t = np.linspace(0, 1, 11)
+    for bad, match in ((sp.Symbol("k") * theta, "uses k"), (sp.Function("u")(pfaff.t), "uses")):
+        with pytest.raises(pfaff.ModelError, match=match):
+            pfaff.fit(model, t, np.zeros(11), {"c": 0.1}, [bad], [0.1], [0.0])
+
+
+def test_parameter_with_assumptions_in_an_expression(model):
+    """A parameter symbol written with assumptions (l positive) is the model's parameter l."""
+    t = np.linspace(0, 2, 41)
+    run = clean_run(model, t)
+    theta = model.linearizer.coordinates[0]
+    x = sp.Symbol("l", positive=True) * sp.sin(theta)
+    data = TRUTH["l"] * np.sin(run.q[:, 0])
+    res = pfaff.fit(model, t, data, {"l": 1.0}, [x], [0.6], [0.0], rtol=1e-11)
+    assert res.estimates["l"] == pytest.approx(0.8, rel=1e-6)

@@ -90,6 +90,8 @@ class Observation:
         rule = {speed(c): v[i] for i, c in enumerate(coords)}
         rule.update({c: q[i] for i, c in enumerate(coords)})
         x = e.xreplace(rule)
+        by_name = {p.name: p for p in ps}  # a parameter by its name, whatever its assumptions
+        x = x.xreplace({s: by_name[s.name] for s in x.free_symbols if s.name in by_name})
         known = set(q) | set(v) | set(ps)
         unknown = {s for s in x.free_symbols if s not in known}
         if unknown or x.atoms(AppliedUndef, sp.Derivative):
