@@ -163,3 +163,40 @@ def test_constraints_hold_to_first_order(cartesian_run):
     d = q[:, 2:] - q[:, :2]
     rod2 = 2 * np.einsum("ki,ki->k", d, S[:, 2:4, 1] - S[:, :2, 1]) - 2 * VALUES["l2"]
     assert np.abs(rod1).max() < 1e-10 and np.abs(rod2).max() < 1e-10
+
+
+def chaplygin_sleigh():
+    """The Chaplygin sleigh: a knife edge at (x, y) heading φ, its mass centre a ahead, no side
+    slip −sin φ ẋ + cos φ ẏ = 0 (a velocity constraint only)."""
+    import sympy as sp
+
+    x, y, phi = pfaff.coordinates("x y phi")
+    m, inertia, a = sp.symbols("m I a")
+    s = pfaff.System([x, y, phi])
+    s.add_particle(m, [x + a * sp.cos(phi), y + a * sp.sin(phi)])
+    s.add_kinetic_energy(inertia * phi.diff() ** 2 / 2)
+    s.add_velocity_constraint(-sp.sin(phi) * x.diff() + sp.cos(phi) * y.diff(), name="edge")
+    return s
+
+
+def test_nonholonomic_sleigh_by_its_offset():
+    values = {"m": 2.0, "I": 0.3, "a": 0.4}
+    model = chaplygin_sleigh().equations().compile(values)
+    q0, qd0 = [0.0, 0.0, 0.3], [np.cos(0.3), np.sin(0.3), 1.5]  # on the constraint for any a
+    opts = {"rtol": 1e-12, "atol": 1e-14, "t_eval": [0.0, 2.0]}
+    run = pfaff.sensitivities(model, q0, qd0, (0, 2), parameters=["a", "I"], **opts)
+    for j, name in enumerate(["a", "I"]):
+
+        def end(v: float, name: str = name) -> np.ndarray:
+            other = model.with_parameters({name: v})
+            traj = pfaff.simulate(other, q0, qd0, (0, 2), **opts)
+            return np.concatenate((traj.q[-1], traj.qd[-1]))
+
+        assert close(run.sensitivity[-1, :, j], converged(end, values[name]))
+    # the velocity constraint to first order: ∂(−sin φ ẋ + cos φ ẏ)/∂p = 0
+    q, qd, S = run.q[-1], run.qd[-1], run.sensitivity[-1]
+    dV = (
+        -np.cos(q[2]) * qd[0] * S[2] - np.sin(q[2]) * qd[1] * S[2]
+        - np.sin(q[2]) * S[3] + np.cos(q[2]) * S[4]
+    )  # fmt: skip
+    assert np.abs(dV).max() < 1e-10
