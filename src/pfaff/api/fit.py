@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from pfaff.api.observe import Observation
 from pfaff.core.errors import OptionError, SimulationError, StateError
@@ -332,6 +331,8 @@ def fit(
     >>> res.status, round(res.estimates["c"], 6), round(res.estimates["l"], 6)
     ('success', 0.05, 0.8)
     """
+    from scipy.optimize import least_squares  # (imported on the first fit, not with pfaff)
+
     check_model(model)
     unknowns = _unknowns(model, parameters)
     coords = list(getattr(model.linearizer, "coordinates", ()) or ())

@@ -16,8 +16,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.integrate import DOP853
-from scipy.linalg.lapack import dgetrf, dgetrs
 
 from pfaff.derive.variational import VariationalKernel
 from pfaff.integrate.integrators import ProjectedRK
@@ -85,6 +83,9 @@ class AugmentedField:
         self.ext = np.zeros((2 * n + r, k))
         self.ext[2 * n :, :r] = np.eye(r)
         self.nfev = 0
+        from scipy.linalg.lapack import dgetrf, dgetrs  # (LAPACK directly: little overhead)
+
+        self._lapack = dgetrf, dgetrs
 
     def solve(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
         """q̈ (n,), S_a (n, k), S_λ (m, k) at (t, y) and λ (m,)."""
@@ -95,7 +96,8 @@ class AugmentedField:
         K, EG = self.kernel.kkt(x)
         if m != len(self.keep):
             K, EG = K[np.ix_(rows, rows)], EG[rows]
-        lu, piv, info = dgetrf(K)  # LAPACK directly: one factorization for both solves
+        dgetrf, dgetrs = self._lapack
+        lu, piv, info = dgetrf(K)  # one factorization for both solves
         if info > 0:
             raise np.linalg.LinAlgError(
                 f"the KKT matrix of the sensitivities is singular at t = {t:.17g}"
@@ -124,14 +126,16 @@ class AugmentedField:
         return out
 
 
-class _StateDOP853(DOP853):
-    """DOP853 whose step-size control reads the first ``n_state`` components only."""
+def state_dop853(n_state: int) -> type:
+    """SciPy's DOP853 whose step-size control reads the first ``n_state`` components only
+    (SciPy imported here, on the first run, not with pfaff)."""
+    from scipy.integrate import DOP853
 
-    n_state = 0
+    class StateDOP853(DOP853):
+        def _estimate_error_norm(self, K: np.ndarray, h: float, scale: np.ndarray) -> float:
+            return super()._estimate_error_norm(K[:, :n_state], h, scale[:n_state])
 
-    def _estimate_error_norm(self, K: np.ndarray, h: float, scale: np.ndarray) -> float:
-        s = self.n_state
-        return super()._estimate_error_norm(K[:, :s], h, scale[:s])
+    return StateDOP853
 
 
 class SensitivityRK(ProjectedRK):
@@ -163,8 +167,7 @@ class SensitivityRK(ProjectedRK):
         self.n = n = len(q0)
         S0 = tangent_project(setup.kernel, self._x(t0, q0, qd0), setup.S0)
         y0 = np.concatenate([q0, qd0, S0.ravel()])
-        solver = type("_Solver", (_StateDOP853,), {"n_state": 2 * n})
-        self.solver = solver(
+        self.solver = state_dop853(2 * n)(
             self.field, t0, y0, t_end, rtol=options.rtol, atol=options.atol, **options.step_sizes()
         )
         self.fun = self.field
