@@ -109,6 +109,7 @@ def test_plot_writes_a_figure(model, tmp_path):
     res.plot(tmp_path / "fit.png")
     assert (tmp_path / "fit.png").stat().st_size > 1000
     assert set(res.to_dict()) >= {"estimates", "standard_errors", "status", "message"}
+    assert repr(res).startswith("<pfaff.FitResult success: c = 0.05 ±")
 
 
 def test_observed_expression_refusals(model):

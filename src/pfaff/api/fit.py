@@ -22,7 +22,7 @@ from pfaff.integrate.sensitivity import sensitivities
 from pfaff.numeric.checks import check_model
 
 
-@dataclass
+@dataclass(repr=False)
 class FitResult:
     """The outcome of :func:`pfaff.fit`.
 
@@ -57,6 +57,12 @@ class FitResult:
     fitted: np.ndarray
     observed: list[str] = field(default_factory=list)
     nfev: int = 0
+
+    def __repr__(self) -> str:
+        values = ", ".join(
+            f"{k} = {v:.6g} ± {self.standard_errors[k]:.2g}" for k, v in self.estimates.items()
+        )
+        return f"<pfaff.FitResult {self.status}: {values}>"
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (no arrays but the residuals' RMS per observation)."""
