@@ -129,3 +129,23 @@ def test_parameter_with_assumptions_in_an_expression(model):
     data = TRUTH["l"] * np.sin(run.q[:, 0])
     res = pfaff.fit(model, t, data, {"l": 1.0}, [x], [0.6], [0.0], rtol=1e-11)
     assert res.estimates["l"] == pytest.approx(0.8, rel=1e-6)
+
+
+def test_constrained_model_with_a_moving_start():
+    """The Cartesian pendulum's rod length from x(t), y(t): the start moves with L (fixed angle),
+    given as functions of the parameters; noise-free data give L back."""
+    cart = pfaff.models.cartesian_pendulum().equations().compile({"m": 1.0, "g": 9.81, "L": 1.0})
+    angle = 0.7
+
+    def q0(p):
+        return [p["L"] * np.sin(angle), -p["L"] * np.cos(angle)]
+
+    truth = cart.with_parameters({"L": 1.3})
+    t = np.linspace(0, 2, 41)
+    run = pfaff.simulate(truth, q0({"L": 1.3}), [0, 0], (0, 2), t_eval=t, rtol=1e-12, atol=1e-14)
+    res = pfaff.fit(
+        cart, t, run.q, {"L": 1.0}, ["x", "y"], q0, lambda p: [0.0, 0.0],
+        bounds={"L": (0.5, 2.0)}, rtol=1e-11,
+    )  # fmt: skip
+    assert res.status == "success"
+    assert res.estimates["L"] == pytest.approx(1.3, rel=1e-7)
