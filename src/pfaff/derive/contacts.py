@@ -1,0 +1,143 @@
+"""The compile stage of ``System.add_unilateral_constraint``: the models a contact run switches.
+
+A run of a system with k unilateral constraints steps, between events, the model in which the
+closed contacts are holonomic rows appended after the bilateral ones (in the order of
+declaration) and the open ones are absent. :class:`CompiledContacts` (a compiled model's
+``contacts``) makes each such *variant* on first use, from the system with those rows added, with
+the model's parameter values and compile options, and keeps it: ``variant(mask)`` for a tuple of
+k booleans. The variant with every contact closed also gives the gaps (its position residuals)
+and the impact matrices (:mod:`pfaff.integrate.contact`).
+
+Variants are not pickled: a pickled model carries the system and makes them again.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import sympy as sp
+
+from pfaff.core.errors import ModelError, ParameterError
+from pfaff.derive.compile import build_model, input_names, model_parameter_values
+from pfaff.derive.templates import derive
+
+if TYPE_CHECKING:
+    from pfaff.derive.equations import Derivation
+    from pfaff.mechanics.system import SystemSpec
+    from pfaff.numeric.model import NumericModel
+
+
+class CompiledContacts:
+    """The unilateral constraints of a compiled model.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The contacts, in order of declaration (their multiplier columns follow the bilateral
+        ones in a run's :attr:`pfaff.Trajectory.multipliers`).
+    restitution : tuple of float
+        Newton's coefficient of each, with the model's parameter values.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> s = pfaff.models.bouncing_ball()
+    >>> model = s.equations().compile({"m": 1, "g": 9.81})
+    >>> model.contacts.names, model.contacts.restitution
+    (('floor',), (0.8,))
+    >>> model.contacts.variant((True,)).constraint_names
+    ['floor']
+    """
+
+    def __init__(
+        self,
+        system: SystemSpec,
+        parameters: Mapping[str, float],
+        solver: str | None,
+        evaluator: str | None,
+    ) -> None:
+        self.system, self.parameters = system, dict(parameters)
+        self.solver, self.evaluator = solver, evaluator
+        self.names = tuple(c.name for c in system.contacts)
+        self.restitution = tuple(
+            _restitution(c.name, c.restitution, self.parameters) for c in system.contacts
+        )
+        self._variants: dict[tuple[bool, ...], NumericModel] = {}
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def variant(self, mask: Sequence[bool]) -> NumericModel:
+        """The model with the contacts where ``mask`` is True as holonomic rows (made once)."""
+        key = tuple(bool(x) for x in mask)
+        model = self._variants.get(key)
+        if model is None:
+            model = self._variants[key] = self._compile(key)
+        return model
+
+    def _compile(self, mask: tuple[bool, ...]) -> NumericModel:
+        closed = closed_system(self.system, mask)
+        eom: Derivation = derive(closed)
+        inputs = input_names(eom)
+        given = {**{i: 0.0 for i in inputs}, **self.parameters}
+        values = model_parameter_values(eom, given)
+        return build_model(eom, values, solver=self.solver, evaluator=self.evaluator, inputs=inputs)
+
+    def with_parameters(self, parameters: Mapping[str, float]) -> CompiledContacts:
+        """The same contacts with other parameter values (their variants made anew)."""
+        return CompiledContacts(self.system, parameters, self.solver, self.evaluator)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if k != "_variants"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state, _variants={})
+
+    def __repr__(self) -> str:
+        return f"CompiledContacts({', '.join(self.names)})"
+
+
+def closed_system(system: SystemSpec, mask: Sequence[bool]) -> SystemSpec:
+    """A copy of ``system`` with the contacts of ``mask`` as holonomic constraints (appended
+    after its own constraints, in declaration order), without contacts or events."""
+    closed = copy.copy(system)
+    closed.pieces = list(system.pieces)
+    closed._counts = dict(system._counts)
+    closed._constraint_keys = dict(system._constraint_keys)
+    closed._parameters = set(system._parameters)
+    closed.events, closed.contacts = [], []
+    for spec, on in zip(system.contacts, mask, strict=True):
+        if on:
+            closed.add_holonomic_constraint(spec.gap, name=spec.name)
+    return closed
+
+
+def _restitution(name: str, e: sp.Expr, parameters: Mapping[str, float]) -> float:
+    value = e.xreplace({s: sp.Float(parameters[s.name]) for s in e.free_symbols})
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ModelError(
+            f"unilateral constraint `{name}`: `restitution` {e} is not a number"
+        ) from None
+    if not (math.isfinite(x) and 0.0 <= x <= 1.0):
+        raise ParameterError(
+            f"unilateral constraint `{name}`: the restitution {e} = {x:g} with these parameter "
+            "values must lie in [0, 1]"
+        )
+    return x
+
+
+def compile_contacts(
+    eom: Derivation, values: Sequence[float], solver: str | None, evaluator: str | None
+) -> CompiledContacts | None:
+    """The contacts declared on ``eom``'s system (the model's ordered parameter ``values``),
+    or None when it has none."""
+    system = getattr(eom, "system", None)
+    if not getattr(system, "contacts", None):
+        return None
+    parameters = {p.name: float(v) for p, v in zip(eom.parameters, values, strict=True)}
+    return CompiledContacts(system, parameters, solver, evaluator)  # type: ignore[arg-type]
