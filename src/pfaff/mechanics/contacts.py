@@ -95,21 +95,26 @@ class ContactsMixin:
                 f"unilateral constraint `{label}`: `gap` must be an expression g(q, t) (meaning "
                 "g ≥ 0), not a relation"
             )
-        g = as_expr(gap, f"unilateral constraint `{label}`: `gap`")
-        e = as_expr(restitution, f"unilateral constraint `{label}`: `restitution`")
-        self._scan((g,), f"unilateral constraint `{label}`: `gap`", speeds=False)
-        if not g.has(*self.coordinates):
-            raise ModelError(
-                f"unilateral constraint `{label}`: `gap` = {g} does not depend on the coordinates"
-            )
-        self._scan((e,), f"unilateral constraint `{label}`: `restitution`", speeds=False)
-        if e.has(t, *self.coordinates):
-            raise ModelError(
-                f"unilateral constraint `{label}`: `restitution` must be a number or an "
-                f"expression in the parameters, got {e}"
-            )
-        if e.is_number and not (e.is_real and 0 <= float(e) <= 1):
-            raise ModelError(
-                f"unilateral constraint `{label}`: `restitution` must lie in [0, 1], got {e}"
-            )
+        known = set(self._parameters)
+        try:
+            g = as_expr(gap, f"unilateral constraint `{label}`: `gap`")
+            e = as_expr(restitution, f"unilateral constraint `{label}`: `restitution`")
+            self._scan((g,), f"unilateral constraint `{label}`: `gap`", speeds=False)
+            if not g.has(*self.coordinates):
+                raise ModelError(
+                    f"unilateral constraint `{label}`: `gap` = {g} does not depend on the coordinates"
+                )
+            self._scan((e,), f"unilateral constraint `{label}`: `restitution`", speeds=False)
+            if e.has(t, *self.coordinates):
+                raise ModelError(
+                    f"unilateral constraint `{label}`: `restitution` must be a number or an "
+                    f"expression in the parameters, got {e}"
+                )
+            if e.is_number and not (e.is_real and 0 <= float(e) <= 1):
+                raise ModelError(
+                    f"unilateral constraint `{label}`: `restitution` must lie in [0, 1], got {e}"
+                )
+        except Exception:
+            self._parameters = known  # a refused constraint adds no parameter
+            raise
         self.contacts.append(ContactSpec(label, g, e))
