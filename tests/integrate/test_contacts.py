@@ -8,10 +8,10 @@ import pickle
 import numpy as np
 import pytest
 import sympy as sp
+from tests.methods import ALL_METHODS
 
 import pfaff
 from pfaff.errors import ModelError, OptionError, StateError
-from tests.methods import ALL_METHODS
 
 TOL = {"rtol": 1e-12, "atol": 1e-14}
 G = 9.81
@@ -109,9 +109,7 @@ def test_ball_t_eval_and_pickle(ball):
     assert set(te) <= set(traj.t)
     again = pickle.loads(pickle.dumps(ball))
     other = pfaff.simulate(again, q0, qd0, (0.0, 2.0), t_eval=te, **TOL)
-    np.testing.assert_allclose(
-        [r.t for r in other.events], [r.t for r in traj.events], rtol=1e-13
-    )
+    np.testing.assert_allclose([r.t for r in other.events], [r.t for r in traj.events], rtol=1e-13)
     softer = ball.with_parameters({"e": 0.5})
     assert softer.contacts.restitution == (0.5,)
 
@@ -146,7 +144,7 @@ def test_double_pendulum_hits_wall():
     model, (m1, m2, L1, L2) = _double_pendulum_wall(e, wall=-0.3)
     th = np.array([0.3, 0.2])  # released from rest, swinging towards the wall at x₂ = −0.3
     q0 = np.array([L1 * np.sin(th[0]), -L1 * np.cos(th[0]), 0, 0])
-    q0[2:] = q0[:2] + [L2 * np.sin(th[1]), -L2 * np.cos(th[1])]
+    q0[2:] = q0[:2] + np.array([L2 * np.sin(th[1]), -L2 * np.cos(th[1])])
     traj = pfaff.simulate(model, q0, np.zeros(4), (0.0, 1.5), **TOL)
     assert traj.status == "success", traj.message
     ev = next(r for r in traj.events if r.kind == "impact")
@@ -199,9 +197,7 @@ def test_ball_on_two_contacts():
     rest = traj.events[-1]
     assert rest.kind == "rest"
     later = traj.t > rest.t
-    np.testing.assert_allclose(
-        traj.multipliers[later], m * G / (2 * np.cos(beta)), rtol=1e-10
-    )
+    np.testing.assert_allclose(traj.multipliers[later], m * G / (2 * np.cos(beta)), rtol=1e-10)
 
 
 # ---------------------------------------------------------------- bad input
@@ -213,7 +209,7 @@ def test_bad_contacts():
         s.add_unilateral_constraint(y.diff(pfaff.t))
     with pytest.raises(ModelError, match=r"\[0, 1\]"):
         s.add_unilateral_constraint(y, restitution=1.5)
-    with pytest.raises(ModelError, match="not a relation|relation"):
+    with pytest.raises(ModelError, match="not a relation"):
         s.add_unilateral_constraint(y >= 0)
     with pytest.raises(ModelError, match="does not depend"):
         s.add_unilateral_constraint(sp.Symbol("a"))
@@ -223,7 +219,7 @@ def test_bad_contacts():
     with pytest.raises(pfaff.errors.ParameterError, match="restitution"):
         s.equations().compile({"e": 2.0})
     model = s.equations().compile({"e": 0.5})
-    with pytest.raises(StateError, match="penetrates.*floor"):
+    with pytest.raises(StateError, match=r"penetrates.*floor"):
         pfaff.simulate(model, [-0.1], [0.0], (0.0, 1.0))
 
 

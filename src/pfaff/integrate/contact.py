@@ -266,7 +266,9 @@ class Segments:
                 F[:, mb + j] = [
                     c.gaps(t, q, qd)[0][j] for t, q, qd in zip(T[sl], Q[sl], QD[sl], strict=True)
                 ]
-            parts = {"qdd": ev["qdd"], "multipliers": lam, "f": F, "g": G}
+            opened = np.zeros((count, mb + k), dtype=bool)
+            opened[:, [mb + j for j in range(k) if not mode[j]]] = True
+            parts = {"qdd": ev["qdd"], "multipliers": lam, "f": F, "g": G, "open": opened}
             for key in ("T", "V", "T0", "T2"):
                 parts[key] = ev[key]
             parts["redundant_rows"] = ev.get("redundant_rows", np.zeros(count, dtype=np.int64))

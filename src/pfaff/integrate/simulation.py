@@ -703,4 +703,5 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         geometry=model.geometry,  # what Trajectory.animate draws
         redundant_rows=ev.get("redundant_rows", np.zeros(len(T), dtype=np.int64)),
         impact_work=np.array(getattr(run, "IW", np.zeros(len(T)))),
+        contact_open=ev.get("open", np.zeros((len(T), m), dtype=bool)),
     )

@@ -32,6 +32,9 @@ class Trajectory:
     nc_work : ndarray, shape (k,)
         W_nc(t): the work done by the applied (non-conservative) forces since the start, ∫ Qᵀq̇ dt,
         integrated along the solution with the integrator's dense output.
+    contact_open : ndarray of bool, shape (k, m)
+        True on the rows of unilateral constraints that are open at that time (their
+        ``multipliers`` are 0 and ``constraint_residual[:, 0]`` holds the gap, not a residual).
     impact_work : ndarray, shape (k,)
         W_impact(t): the work of the impulses of the impacts so far (unilateral constraints,
         ``System.add_unilateral_constraint``), ≤ 0 for a loss; zero without impacts.
@@ -80,6 +83,9 @@ class Trajectory:
         self.jacobi: np.ndarray = fields["jacobi"]
         self.nc_work: np.ndarray = fields.get("nc_work", np.zeros(len(fields["t"])))
         self.impact_work: np.ndarray = fields.get("impact_work", np.zeros(len(fields["t"])))
+        self.contact_open: np.ndarray = np.asarray(
+            fields.get("contact_open", np.zeros(self.multipliers.shape, dtype=bool)), dtype=bool
+        )
         self.constraint_residual: np.ndarray = fields["constraint_residual"]
         self.stats: dict = fields["stats"]
         self.status: str = fields["status"]
