@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import StateError
+from pfaff.core.errors import ConstraintError, SimulationError, StateError
 from pfaff.core.events import Event, EventRecord
 from pfaff.integrate.events import UserEvents, root_tolerance
 from pfaff.integrate.impact import MAX_CONTACTS, impulse
@@ -35,6 +35,8 @@ from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.stepper import _RunFailure
 from pfaff.numeric.projection import Projector
 
+# the numerical failures of the equations at an event's state (as in a step: a failed run)
+NUMERICAL = (StateError, ConstraintError, FloatingPointError, np.linalg.LinAlgError)
 MAX_REPEATS = 1000  # events in a row without time advancing: the run fails (no progress)
 
 
@@ -229,9 +231,9 @@ class Segments:
         self.records: list[EventRecord] = []
         self.work = 0.0  # of the applied forces up to the current segment
 
-    def add(self, mode: tuple[bool, ...], run: Any, internal: set[str]) -> None:
-        """The states of one segment's run (``internal``: its contact events' names, not
-        recorded as user events)."""
+    def add(self, mode: tuple[bool, ...], run: Any, fired: bool) -> None:
+        """The states of one segment's run; ``fired``: it ended at a contact's event (its last
+        record, which the contact's own records replace)."""
         k = len(run.T)
         self.parts.append((mode, k))
         self.T += run.T
@@ -240,7 +242,7 @@ class Segments:
         self.W += [w + self.work for w in run.W]
         self.IW += [self.contacts.impact_work] * k
         self.switches += run.switches
-        self.records += [r for r in run.records if r.name not in internal]
+        self.records += run.records[:-1] if fired else run.records
         if run.W:
             self.work = self.W[-1]
 
@@ -306,7 +308,10 @@ def run_segments(
     segs = Segments(contacts)
     contacts.check_gaps(t0, q0, qd0)
     mode = (False,) * contacts.k
-    mode, q, qd, kinds = contacts.transition(t0, q0, qd0, mode)
+    try:
+        mode, q, qd, kinds = contacts.transition(t0, q0, qd0, mode)
+    except _RunFailure as err:  # the run cannot start
+        raise SimulationError(f"at the initial state: {err}") from None
     _record(segs, kinds, t0, q, qd)
     t, stats, projectors, repeats = t0, {}, [], 0
     n_user = len(user.events)
@@ -317,11 +322,11 @@ def run_segments(
         run, status, message, projector = start(contacts.model(mode), t, q, qd, events)
         projectors.append(projector)
         user.counts = events.counts[:n_user]
-        segs.add(mode, run, {ev.name for ev in evs} - set(user.names))
+        fired = [i - n_user for i, c in enumerate(events.counts[n_user:], n_user) if c]
+        segs.add(mode, run, bool(fired))  # a contact's event is terminal: the last root
         for key, v in run.finish().items():
             if isinstance(v, int | float):
                 stats[key] = stats.get(key, 0) + v
-        fired = [i - n_user for i, c in enumerate(events.counts[n_user:], n_user) if c]
         if status != "success" or not fired or not run.T:
             return status, message, segs, stats, projectors
         t_new = run.T[-1]
@@ -336,7 +341,10 @@ def run_segments(
         j = fired[0]
         q, qd = run.Q[-1], run.QD[-1]
         released = j if mode[j] else None
-        mode, q, qd, kinds = contacts.transition(t_new, q, qd, mode, released)
+        try:
+            mode, q, qd, kinds = contacts.transition(t_new, q, qd, mode, released)
+        except (_RunFailure, *NUMERICAL) as err:
+            return "failed", f"failed at t = {t_new:.17g}: {err}", segs, stats, projectors
         _record(segs, kinds, t_new, q, qd)
         t = t_new
         stats["contact_events"] = stats.get("contact_events", 0) + 1
