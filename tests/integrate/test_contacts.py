@@ -170,6 +170,23 @@ def test_double_pendulum_hits_wall(method):
     assert np.abs(traj.constraint_residual[:, :, :2]).max() < 1e-11  # the rods kept
 
 
+def test_pendulum_hits_stop():
+    """A pendulum released at θ₀ hits a stop at θ = −θ_s with θ̇⁻ = −√(2g/L (cos θ_s − cos θ₀))
+    (energy) and rebounds at −e θ̇⁻ (a joint limit as a unilateral constraint)."""
+    s = pfaff.models.pendulum()
+    theta = s.coordinates[0]
+    s.add_unilateral_constraint(theta + 0.2, name="stop", restitution=0.5)
+    model = s.equations().compile({"m": 1.0, "g": G, "L": 1.0})
+    traj = pfaff.simulate(model, [0.5], [0.0], (0.0, 1.0), **TOL)
+    ev = traj.events[0]
+    assert (ev.name, ev.kind) == ("stop", "impact")
+    i = np.flatnonzero(traj.t == ev.t)
+    incoming = -np.sqrt(2 * G * (np.cos(0.2) - np.cos(0.5)))
+    assert traj.qd[i[0], 0] == pytest.approx(incoming, rel=1e-10)
+    assert traj.qd[i[1], 0] == pytest.approx(-0.5 * traj.qd[i[0], 0], rel=1e-12)
+    assert ev.q[0] == pytest.approx(-0.2, abs=1e-12)
+
+
 # ---------------------------------------------------------------- a ball landing on two contacts
 @pytest.mark.parametrize("method", ALL_METHODS)
 def test_ball_on_two_contacts(method):
