@@ -89,8 +89,8 @@ def impulse(
 
     >>> r = impulse(np.eye(1) * 2, np.zeros((0, 1)), np.zeros(0), np.ones((1, 1)),
     ...             np.array([-3.0]), np.array([0.5]), np.array([-3.0]))
-    >>> r.dqd.tolist(), r.contact.tolist(), r.work
-    ([4.5], [9.0], -6.75)
+    >>> [round(float(x), 12) for x in (r.dqd[0], r.contact[0], r.rates[0], r.work)]
+    [4.5, 9.0, 1.5, -6.75]
     """
     n, mb, k = M.shape[0], Ab.shape[0], Ac.shape[0]
     target = -restitution * np.minimum(rates, 0.0)

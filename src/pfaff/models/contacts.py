@@ -69,7 +69,8 @@ def particle_on_sphere_state(
     if radius <= 0:
         raise ModelError(f"`radius` must be positive, got {radius}")
     s, c = np.sin(theta), np.cos(theta)
-    return np.array([radius * s, 0.0, radius * c]), np.array([speed * c, 0.0, -speed * s])
+    q = np.array([radius * s, 0.0, radius * c]) + 0.0
+    return q, np.array([speed * c, 0.0, -speed * s]) + 0.0  # (no -0.0)
 
 
 def bouncing_ball(
