@@ -136,11 +136,13 @@ class ContactRun:
         J = [j for j in range(self.k) if (mask[j] or gap[j] <= self.touch) and j != released]
         kinds: list[tuple[str, str]] = []
         qd_plus = qd
-        closing = [j for j in J if rate[j] < 0.0]
-        if closing:
-            qd_plus, kinds = self._impact(t, q, qd, J, rate)
-            rate = self.gaps(t, q, qd_plus)[1]
         zero = 1e-9 * (1.0 + float(np.abs(qd).max(initial=0.0)))
+        if any(rate[j] < 0.0 for j in J):
+            qd_plus, kinds = self._impact(t, q, qd, J, rate)
+            # events: the contacts that were open, and closed ones hit at a real speed
+            kinds = [(self.contacts.names[j], kind) for j, kind in kinds
+                     if not mask[j] or -rate[j] > zero]  # fmt: skip
+            rate = self.gaps(t, q, qd_plus)[1]
         closed = [j for j in J if rate[j] <= zero]
         if released is not None and mask[released]:
             kinds.append((self.contacts.names[released], "release"))
@@ -151,7 +153,8 @@ class ContactRun:
 
     def _impact(
         self, t: float, q: np.ndarray, qd: np.ndarray, J: list[int], rate: np.ndarray
-    ) -> tuple[np.ndarray, list[tuple[str, str]]]:
+    ) -> tuple[np.ndarray, list[tuple[int, str]]]:
+        """q̇⁺ after the impulse of the contacts ``J`` and, per contact closing, (index, kind)."""
         M, A, *_ = self.full.dae_blocks(t, q, qd)
         M, A = (x.toarray() if sps.issparse(x) else np.asarray(x) for x in (M, A))
         mb = self.mb
@@ -167,7 +170,7 @@ class ContactRun:
             )
         self.impact_work += res.work
         kinds = [
-            (self.contacts.names[j], "rest" if s <= self.rest_speed else "impact")
+            (j, "rest" if s <= self.rest_speed else "impact")
             for j, s in zip(J, speeds, strict=True)
             if s > 0.0
         ]
@@ -319,7 +322,10 @@ def run_segments(
         evs = contacts.events(mode, t, q)
         events = UserEvents([*user.events, *evs])
         events.counts[:n_user] = user.counts
-        run, status, message, projector = start(contacts.model(mode), t, q, qd, events)
+        try:
+            run, status, message, projector = start(contacts.model(mode), t, q, qd, events)
+        except (_RunFailure, *NUMERICAL) as err:  # the method could not start from this state
+            return "failed", f"failed at t = {t:.17g}: {err}", segs, stats, projectors
         projectors.append(projector)
         user.counts = events.counts[:n_user]
         fired = [i - n_user for i, c in enumerate(events.counts[n_user:], n_user) if c]
