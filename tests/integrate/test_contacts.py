@@ -110,8 +110,14 @@ def test_ball_t_eval_and_pickle(ball):
     again = pickle.loads(pickle.dumps(ball))
     other = pfaff.simulate(again, q0, qd0, (0.0, 2.0), t_eval=te, **TOL)
     np.testing.assert_allclose([r.t for r in other.events], [r.t for r in traj.events], rtol=1e-13)
-    softer = ball.with_parameters({"e": 0.5})
+    softer = ball.with_parameters({"e": 0.5})  # its closed model from the one made above
     assert softer.contacts.restitution == (0.5,)
+    soft = pfaff.simulate(softer, q0, qd0, (0.0, 1.0), **TOL)
+    i = np.flatnonzero(soft.t == soft.events[0].t)
+    assert soft.qd[i[1], 1] == pytest.approx(-0.5 * soft.qd[i[0], 1], rel=1e-12)
+    heavier = ball.with_parameters({"m": 2.0})
+    rest = pfaff.simulate(heavier, [0.0, 0.0], [0.0, 0.0], (0.0, 0.5), **TOL)
+    np.testing.assert_allclose(rest.multipliers[:, 0], 2.0 * G, rtol=1e-12)
 
 
 # ---------------------------------------------------------------- a double pendulum hitting a wall

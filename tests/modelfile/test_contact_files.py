@@ -66,3 +66,25 @@ def test_bad_tables(tmp_path, table, match):
     path.write_text(text)
     with pytest.raises(PfaffError, match=match):  # ModelFileError, or the parser's own
         pfaff.load_model(path)
+
+
+def test_sweep_batch_over_restitution():
+    """A sweep's runs (in process) over e: the contact's multiplier column and name, the states
+    at the samples only (not the impacts' own), and the rebound height e² h after the first
+    impact, at t₁ + e t₁ (the first apex)."""
+    from pfaff.sweep.grid import Grid
+    from pfaff.sweep.worker import SweepSpec, run_batch
+
+    t1 = np.sqrt(2 / 9.81)
+    es = np.array([0.5, 0.8])
+    t_eval = np.array([0.0, 0.2, t1 + 0.5 * t1, t1 + 0.8 * t1])
+    spec = SweepSpec(
+        EXAMPLE.read_text(), EXAMPLE.name, {"m": 0.5, "g": 9.81, "e": 0.8}, (0.0, 1.0),
+        (0.0, 0.0), ("x", "y"), Grid(("e",), (es,)), t_eval, {"rtol": 1e-12, "atol": 1e-14},
+    )  # fmt: skip
+    out = run_batch(spec, [0, 1])
+    assert out["status"] == ["success", "success"]
+    assert out["constraint_names"] == ["floor"] and out["multipliers"].shape == (2, 4, 1)
+    np.testing.assert_allclose(out["q"][[0, 1], [2, 3], 1], es**2, rtol=1e-10)
+    np.testing.assert_allclose(out["q"][:, 1, 1], 1 - 0.5 * 9.81 * 0.2**2, rtol=1e-12)
+    assert (out["constraint_residual"] < 1e-12).all()

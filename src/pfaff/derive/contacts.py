@@ -66,6 +66,10 @@ class CompiledContacts:
             _restitution(c.name, c.restitution, self.parameters) for c in system.contacts
         )
         self._variants: dict[tuple[bool, ...], NumericModel] = {}
+        # the variants of the model these contacts were made from by with_parameters: each
+        # one's with_parameters (new kernels only where a value changed) is cheaper than a
+        # derivation
+        self._origin: dict[tuple[bool, ...], NumericModel] = {}
 
     def __len__(self) -> int:
         return len(self.names)
@@ -75,7 +79,9 @@ class CompiledContacts:
         key = tuple(bool(x) for x in mask)
         model = self._variants.get(key)
         if model is None:
-            model = self._variants[key] = self._compile(key)
+            old = self._origin.get(key)
+            made = self._compile(key) if old is None else old.with_parameters(self.parameters)
+            model = self._variants[key] = made
         return model
 
     def _compile(self, mask: tuple[bool, ...]) -> NumericModel:
@@ -87,14 +93,17 @@ class CompiledContacts:
         return build_model(eom, values, solver=self.solver, evaluator=self.evaluator, inputs=inputs)
 
     def with_parameters(self, parameters: Mapping[str, float]) -> CompiledContacts:
-        """The same contacts with other parameter values (their variants made anew)."""
-        return CompiledContacts(self.system, parameters, self.solver, self.evaluator)
+        """The same contacts with other parameter values (the variants made so far are
+        carried over by their own ``with_parameters`` when first used)."""
+        new = CompiledContacts(self.system, parameters, self.solver, self.evaluator)
+        new._origin = {**self._origin, **self._variants}
+        return new
 
     def __getstate__(self) -> dict[str, Any]:
-        return {k: v for k, v in self.__dict__.items() if k != "_variants"}
+        return {k: v for k, v in self.__dict__.items() if k not in ("_variants", "_origin")}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state, _variants={})
+        self.__dict__.update(state, _variants={}, _origin={})
 
     def __repr__(self) -> str:
         return f"CompiledContacts({', '.join(self.names)})"
