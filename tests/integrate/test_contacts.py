@@ -225,6 +225,34 @@ def test_ball_on_two_contacts(method):
     np.testing.assert_allclose(traj.multipliers[later], m * G / (2 * np.cos(beta)), rtol=1e-10)
 
 
+def test_impulse_lifts_resting_contact():
+    """A particle sliding on a floor at v hits a wall leaning at φ (normal n = (−cos φ, sin φ)):
+    the wall's impulse Λ = (1 + e) m v cos φ along n lifts the particle off the floor, which
+    releases (the LCP leaves the floor's impulse at 0)."""
+    phi, e, m, v = 0.5, 0.4, 1.3, 2.0
+    x, y = pfaff.coordinates("x y")
+    s = pfaff.System([x, y])
+    s.add_particle(m, [x, y])
+    s.add_potential_energy(m * G * y)
+    s.add_unilateral_constraint(y, name="floor")
+    n = np.array([-np.cos(phi), np.sin(phi)])
+    s.add_unilateral_constraint(n[0] * (x - 1) + n[1] * y, name="wall", restitution=e)
+    model = s.equations().compile({})
+    traj = pfaff.simulate(model, [0.0, 0.0], [v, 0.0], (0.0, 0.6), **TOL)
+    assert traj.status == "success", traj.message
+    hit = traj.events[0]
+    assert hit.t == pytest.approx(1 / v, rel=1e-12)
+    assert [(r.name, r.kind) for r in traj.events if r.t == hit.t] == [
+        ("wall", "impact"),
+        ("floor", "release"),
+    ]
+    expected = np.array([v, 0.0]) + n * (1 + e) * v * np.cos(phi)
+    np.testing.assert_allclose(hit.qd, expected, rtol=1e-12, atol=1e-14)
+    before = traj.t < hit.t
+    np.testing.assert_allclose(traj.multipliers[before, 0], m * G, rtol=1e-12)
+    assert (traj.multipliers[before, 1] == 0).all()
+
+
 # ---------------------------------------------------------------- bad input
 def test_bad_contacts():
     y = pfaff.coordinates("y")

@@ -144,11 +144,10 @@ class ContactRun:
                      if not mask[j] or -rate[j] > zero]  # fmt: skip
             rate = self.gaps(t, q, qd_plus)[1]
         closed = [j for j in J if rate[j] <= zero]
-        if released is not None and mask[released]:
-            kinds.append((self.contacts.names[released], "release"))
-        closed, q2, qd2, dropped = self._settle(t, q, qd_plus, closed)
-        kinds += [(self.contacts.names[j], "release") for j in dropped if mask[j]]
+        closed, q2, qd2 = self._settle(t, q, qd_plus, closed)
         new = tuple(j in closed for j in range(self.k))
+        # released: by its multiplier, by the impulse of another contact, or pulling here
+        kinds += [(self.contacts.names[j], "release") for j in range(self.k) if mask[j] > new[j]]
         return new, q2, qd2, kinds
 
     def _impact(
@@ -178,22 +177,21 @@ class ContactRun:
 
     def _settle(
         self, t: float, q: np.ndarray, qd: np.ndarray, closed: list[int]
-    ) -> tuple[list[int], np.ndarray, np.ndarray, list[int]]:
+    ) -> tuple[list[int], np.ndarray, np.ndarray]:
         """Close ``closed``, opening the contact of the most negative multiplier while any
         pulls; the state projected onto the mode's constraints."""
-        dropped: list[int] = []
         while True:
             mask = tuple(j in closed for j in range(self.k))
             model = self.model(mask)
             q2, qd2, _ = Projector(model, tol=self.tol)(t, q, qd)
             if not closed:
-                return closed, q2, qd2, dropped
+                return closed, q2, qd2
             lam = model.solve(t, q2, qd2)[1][self.mb :]
             scale = 1e-12 * (1.0 + float(np.abs(lam).max(initial=0.0)))
             worst = int(np.argmin(lam))
             if lam[worst] >= -scale:
-                return closed, q2, qd2, dropped
-            dropped.append(closed.pop(worst))
+                return closed, q2, qd2
+            closed.pop(worst)
 
 
 def _gap(run: ContactRun, j: int, t0: float | None) -> Callable:
