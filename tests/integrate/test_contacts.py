@@ -178,14 +178,16 @@ def test_double_pendulum_hits_wall(method):
 
 def test_pendulum_hits_stop():
     """A pendulum released at θ₀ hits a stop at θ = −θ_s with θ̇⁻ = −√(2g/L (cos θ_s − cos θ₀))
-    (energy) and rebounds at −e θ̇⁻ (a joint limit as a unilateral constraint)."""
+    (energy) and rebounds at −e θ̇⁻: a joint's limits as two unilateral constraints on one
+    coordinate (which could not both be closed)."""
     s = pfaff.models.pendulum()
     theta = s.coordinates[0]
-    s.add_unilateral_constraint(theta + 0.2, name="stop", restitution=0.5)
+    s.add_unilateral_constraint(theta + 0.2, name="lower", restitution=0.5)
+    s.add_unilateral_constraint(0.6 - theta, name="upper", restitution=0.5)
     model = s.equations().compile({"m": 1.0, "g": G, "L": 1.0})
     traj = pfaff.simulate(model, [0.5], [0.0], (0.0, 1.0), **TOL)
     ev = traj.events[0]
-    assert (ev.name, ev.kind) == ("stop", "impact")
+    assert (ev.name, ev.kind) == ("lower", "impact")
     i = np.flatnonzero(traj.t == ev.t)
     incoming = -np.sqrt(2 * G * (np.cos(0.2) - np.cos(0.5)))
     assert traj.qd[i[0], 0] == pytest.approx(incoming, rel=1e-10)

@@ -5,22 +5,25 @@ closed contacts are holonomic rows appended after the bilateral ones (in the ord
 declaration) and the open ones are absent. :class:`CompiledContacts` (a compiled model's
 ``contacts``) makes each such *variant* on first use, from the system with those rows added, with
 the model's parameter values and compile options, and keeps it: ``variant(mask)`` for a tuple of
-k booleans. The variant with every contact closed also gives the gaps (its position residuals)
-and the impact matrices (:mod:`pfaff.integrate.contact`).
+k booleans. The gaps themselves, their gradients a = ∂g/∂q and ∂g/∂t (what events and impacts
+read, :mod:`pfaff.integrate.contact`) are one lambdified function, :meth:`CompiledContacts.gaps`
+(no model of all contacts closed: a joint's lower and upper stops would contradict each other).
 
-Variants are not pickled: a pickled model carries the system and makes them again.
+Variants and code are not pickled: a pickled model carries the system and makes them again.
 """
 
 from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import sympy as sp
 
 from pfaff.core.errors import ModelError, ParameterError
+from pfaff.core.symbols import local_q, t
 from pfaff.derive.compile import build_model, input_names, model_parameter_values
 from pfaff.derive.templates import derive
 
@@ -50,6 +53,9 @@ class CompiledContacts:
     (('floor',), (0.8,))
     >>> model.contacts.variant((True,)).constraint_names
     ['floor']
+    >>> g, A, b = model.contacts.gaps(0.0, np.array([0.0, 0.5]))
+    >>> g.tolist(), A.tolist(), b.tolist()
+    ([0.5], [[0.0, 1.0]], [0.0])
     """
 
     def __init__(
@@ -70,6 +76,34 @@ class CompiledContacts:
         # one's with_parameters (new kernels only where a value changed) is cheaper than a
         # derivation
         self._origin: dict[tuple[bool, ...], NumericModel] = {}
+        self._code: Callable | None = None
+        self._rows: list[tuple[int, int]] = []
+
+    def gaps(self, t: float, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The gaps g (k,), their gradients A = ∂g/∂q (k, n) and b = ∂g/∂t (k,) at (t, q): the
+        rates are ġ = A q̇ + b."""
+        if self._code is None:
+            self._code = self._lambdified()
+        g, entries, b = self._code(t, *q)
+        A = np.zeros((len(self.names), len(q)))
+        for (j, i), v in zip(self._rows, entries, strict=True):
+            A[j, i] = v
+        return np.array(g, dtype=float), A, np.array(b, dtype=float)
+
+    def _lambdified(self) -> Callable:
+        coords = list(self.system.coordinates)
+        qs = [local_q(i) for i in range(len(coords))]
+        rule = dict(zip(coords, qs, strict=True))
+        values = {sp.Symbol(k): sp.Float(v) for k, v in self.parameters.items()}
+        exprs = [c.gap.xreplace(rule).xreplace(values) for c in self.system.contacts]
+        index = {s: i for i, s in enumerate(qs)}
+        self._rows, entries = [], []
+        for j, g in enumerate(exprs):
+            for i in sorted(index[s] for s in g.free_symbols if s in index):
+                self._rows.append((j, i))
+                entries.append(g.diff(qs[i]))
+        rates = [g.diff(t) for g in exprs]
+        return sp.lambdify([t, *qs], [exprs, entries, rates], modules="math", cse=True)
 
     def __len__(self) -> int:
         return len(self.names)
@@ -100,10 +134,11 @@ class CompiledContacts:
         return new
 
     def __getstate__(self) -> dict[str, Any]:
-        return {k: v for k, v in self.__dict__.items() if k not in ("_variants", "_origin")}
+        skip = ("_variants", "_origin", "_code")
+        return {k: v for k, v in self.__dict__.items() if k not in skip}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state, _variants={}, _origin={})
+        self.__dict__.update(state, _variants={}, _origin={}, _code=None)
 
     def __repr__(self) -> str:
         return f"CompiledContacts({', '.join(self.names)})"

@@ -62,15 +62,9 @@ class ContactRun:
     ) -> None:
         self.base, self.contacts, self.inputs = model, contacts, inputs
         self.k, self.mb = len(contacts), model.m
-        if self.k > MAX_CONTACTS:
-            raise StateError(
-                f"the model has {self.k} unilateral constraints; at most {MAX_CONTACTS} are "
-                "supported (their impacts are solved by enumeration)"
-            )
         self.e = np.array(self.contacts.restitution)
         self.rest_speed, self.tol = rest_speed, tol
         self._models: dict[tuple[bool, ...], Any] = {}
-        self.full = self.model((True,) * self.k)
         self.touch = max(1e3 * tol, 1e-10)  # a gap this small touches
         self.impact_work = 0.0
 
@@ -90,8 +84,8 @@ class ContactRun:
     # ------------------------------------------------------------------ gaps and forces
     def gaps(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The gaps (k,) and their rates ġ = a q̇ + b (k,) at a state."""
-        f, g = self.full.residual(t, q, qd)
-        return np.asarray(f[self.mb :], dtype=float), np.asarray(g[self.mb :], dtype=float)
+        g, A, b = self.contacts.gaps(t, q)
+        return g, A @ qd + b
 
     def events(self, mask: tuple[bool, ...], t0: float, q0: np.ndarray) -> list[Event]:
         """The terminal events of the mode ``mask`` entered at (t0, q0): gaps of open contacts
@@ -154,14 +148,18 @@ class ContactRun:
         self, t: float, q: np.ndarray, qd: np.ndarray, J: list[int], rate: np.ndarray
     ) -> tuple[np.ndarray, list[tuple[int, str]]]:
         """q̇⁺ after the impulse of the contacts ``J`` and, per contact closing, (index, kind)."""
-        M, A, *_ = self.full.dae_blocks(t, q, qd)
-        M, A = (x.toarray() if sps.issparse(x) else np.asarray(x) for x in (M, A))
-        mb = self.mb
-        rows = [mb + j for j in J]
+        if len(J) > MAX_CONTACTS:
+            raise _RunFailure(
+                f"{len(J)} contacts touch at once; at most {MAX_CONTACTS} are solved (by "
+                "enumerating their active sets)"
+            )
+        M, Ab, _, _, gb = self.base.dae_blocks(t, q, qd)
+        M, Ab = (x.toarray() if sps.issparse(x) else np.asarray(x) for x in (M, Ab))
+        Ac = self.contacts.gaps(t, q)[1][J]
         speeds = -rate[J]
         e = np.where(speeds <= self.rest_speed, 0.0, self.e[J])
-        rb = -np.asarray(self.full.residual(t, q, qd)[1][:mb], dtype=float)  # defect removed
-        res = impulse(M, A[:mb], rb, A[rows], rate[J], e, qd)
+        rb = -np.asarray(gb, dtype=float)  # the bilateral rows' velocity defect, removed too
+        res = impulse(M, Ab.reshape(self.mb, len(q)), rb, Ac, rate[J], e, qd)
         if res is None:
             raise _RunFailure(
                 "no impulse satisfies the contacts "
@@ -285,11 +283,14 @@ class Layout:
     with one more constraint row per contact, and the per-segment evaluation."""
 
     def __init__(self, model: Any, segments: Segments) -> None:
-        full = segments.contacts.full
-        self.n, self.m = model.n, full.m
+        mb, k = model.m, segments.contacts.k
+        self.n, self.m = model.n, mb + k
         self.coordinate_names = model.coordinate_names
-        self.multiplier_names = list(full.multiplier_names)
-        self.holonomic = np.asarray(full.holonomic, dtype=bool)
+        self.multiplier_names = [
+            *model.multiplier_names,
+            *(f"lambda{mb + j + 1}" for j in range(k)),
+        ]
+        self.holonomic = np.concatenate([np.asarray(model.holonomic, dtype=bool), np.ones(k, bool)])
         self.parameters, self.geometry = model.parameters, model.geometry
         self.evaluate_states = segments.evaluate_states
 
