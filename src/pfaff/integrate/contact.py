@@ -329,7 +329,7 @@ def run_segments(
         user.counts = events.counts[:n_user]
         fired = [i - n_user for i, c in enumerate(events.counts[n_user:], n_user) if c]
         segs.add(mode, run, bool(fired))  # a contact's event is terminal: the last root
-        for key, v in run.finish().items():
+        for key, v in [*run.finish().items(), ("cpu_time", run.cpu)]:
             if isinstance(v, int | float):
                 stats[key] = stats.get(key, 0) + v
         if status != "success" or not fired or not run.T:

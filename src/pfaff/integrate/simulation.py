@@ -117,7 +117,7 @@ def _stepper_class(method: object) -> type[Stepper]:
 
 def _options(kw: dict, span: tuple[float, float]) -> dict:
     """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
-    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol"):
+    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol", "rest_speed"):
         v = _real(kw[key], key)
         if not (math.isfinite(v) and v >= 0):
             raise OptionError(f"`{key}` must be a finite number >= 0; got {kw[key]!r}")
@@ -353,10 +353,7 @@ def _simulate(
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
     user = _events(model, events)
-    contacts = getattr(model, "contacts", None)
-    rest_speed = _real(rest_speed, "rest_speed")
-    if not (math.isfinite(rest_speed) and rest_speed >= 0):
-        raise OptionError(f"`rest_speed` must be a finite number >= 0; got {rest_speed!r}")
+    contacts = getattr(model, "contacts", None)  # unilateral constraints (integrate/contact)
     if inputs:
         model = DrivenModel(model, inputs)
     t0, t1 = _span(t_span)
@@ -375,6 +372,7 @@ def _simulate(
             initial_tol=initial_tol,
             project_initial=project_initial,
             ida_jacobian=ida_jacobian,
+            rest_speed=rest_speed,
             project_output=project_output,
             progress=progress,
             throw=throw,
@@ -385,7 +383,7 @@ def _simulate(
     options = StepperOptions(**{f.name: opts[f.name] for f in fields(StepperOptions)})
     try:
         q0a, qd0a = initial_state(model, t0, q0, qd0, projector, opts)
-        stepper = cls(model, t0, q0a, qd0a, t1, options, projector)
+        stepper = None if contacts else cls(model, t0, q0a, qd0a, t1, options, projector)
     except _RunFailure as e:  # the method could not start
         raise SimulationError(str(e)) from None
     except (ValueError, ArithmeticError) as e:  # the user's equations, not defined at t0
@@ -395,7 +393,7 @@ def _simulate(
     if project_output is None:
         project_output = not cls.reports_drift
     if contacts:
-        run = ContactRun(model, contacts, inputs, rest_speed, opts["constraint_tol"])
+        run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
         found = _run_contacts(run, cls, options, te, t0, t1, q0a, qd0a, progress, user,
                               project_output)  # fmt: skip
         status, message, segs, stats, projectors = found
