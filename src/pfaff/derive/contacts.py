@@ -124,7 +124,16 @@ class CompiledContacts:
         inputs = input_names(eom)
         given = {**{i: 0.0 for i in inputs}, **self.parameters}
         values = model_parameter_values(eom, given)
-        return build_model(eom, values, solver=self.solver, evaluator=self.evaluator, inputs=inputs)
+        model = build_model(
+            eom, values, solver=self.solver, evaluator=self.evaluator, inputs=inputs
+        )
+        closed_names = [c.name for c, on in zip(self.system.contacts, mask, strict=True) if on]
+        rows = list(model.constraint_names)
+        if rows[len(rows) - len(closed_names) :] != closed_names:  # a run maps columns so
+            raise ModelError(
+                f"the closed contacts' rows are not the last ones ({rows}): a bug of pfaff"
+            )
+        return model
 
     def with_parameters(self, parameters: Mapping[str, float]) -> CompiledContacts:
         """The same contacts with other parameter values (the variants made so far are

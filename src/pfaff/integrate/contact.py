@@ -216,7 +216,8 @@ def _multiplier(model: Any, row: int) -> Callable:
 
 class Segments:
     """The states of a contact run's segments: each segment's model, its records, the impact
-    work to each recorded state; merged into one run for the trajectory (:meth:`merged`)."""
+    work to each recorded state: the ``run`` the trajectory is built from (``T``, ``Q``, ``QD``,
+    ``W``, ``IW``, ``switches``, ``records``), and its per-segment evaluation."""
 
     def __init__(self, contacts: ContactRun) -> None:
         self.contacts = contacts
