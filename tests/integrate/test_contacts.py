@@ -285,3 +285,19 @@ def test_families_refuse_contacts():
     s.add_particle(1, [th[k], 0], over=k)
     with pytest.raises(ModelError, match="families"):
         s.add_unilateral_constraint(s.coordinates[0])
+
+
+def test_zoo_helpers():
+    """The state helpers: on the sphere (|q| = R, q̇ tangent, |q̇| = speed) and above the
+    floor; bad values refused by name."""
+    q, qd = pfaff.models.particle_on_sphere_state(2.0, speed=3.0, theta=0.7)
+    assert np.linalg.norm(q) == pytest.approx(2.0, rel=1e-15)
+    assert q @ qd == pytest.approx(0.0, abs=1e-15)
+    assert np.linalg.norm(qd) == pytest.approx(3.0, rel=1e-15)
+    assert q[2] == pytest.approx(2.0 * np.cos(0.7), rel=1e-15)
+    with pytest.raises(ModelError, match="radius"):
+        pfaff.models.particle_on_sphere_state(-1.0)
+    with pytest.raises(ModelError, match="height"):
+        pfaff.models.bouncing_ball_state(-0.5)
+    e = pfaff.models.bouncing_ball("k").contacts[0].restitution
+    assert e == sp.Symbol("k")
