@@ -5,6 +5,7 @@ from __future__ import annotations
 from pfaff.core.errors import ModelError, OptionError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
+from pfaff.derive.contacts import compile_contacts
 from pfaff.derive.equations import Derivation, Solution
 from pfaff.derive.linearize import linearize as _linearize
 from pfaff.numeric.linearization import Linearization
@@ -107,7 +108,9 @@ class EquationsOfMotion(Derivation):
                     f"`evaluator` of a model with families must be 'template'; got {evaluator!r:.80}"
                 )
             return compile_structured(self, parameters or {}, solver=solver)
-        return compile_equations(self, parameters or {}, solver=solver, evaluator=evaluator)
+        return compile_equations(
+            self, parameters or {}, solver=solver, evaluator=evaluator, contacts=compile_contacts
+        )
 
     def linearize(
         self,

@@ -27,6 +27,7 @@ from pfaff.core.symbols import (
     t,
     validate_coordinates,
 )
+from pfaff.mechanics.contacts import ContactsMixin, ContactSpec
 from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
@@ -101,7 +102,7 @@ def _slot_name(system: SystemSpec, slot: int | Ref) -> str:
     return f"Derivative({slot.family.name}[{slot.stride}*{slot.index} + {slot.shift}], t)"
 
 
-class SystemSpec(ElementsMixin, EventsMixin):
+class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
     """A constrained mechanical system as data: coordinates, pieces and their local forms.
 
     This is the model stage: every ``add_*`` method validates its piece when it is added. The
@@ -135,6 +136,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         self.bodies: list = []  # rigid bodies (add_rigid_body), in order
         self.inputs: list = []  # parameters declared as inputs (add_input)
         self.events: list[EventSpec] = []  # add_event, compiled with the model
+        self.contacts: list[ContactSpec] = []  # add_unilateral_constraint (derive/contacts)
 
     # ------------------------------------------------------------------ inspection helpers
     @property
