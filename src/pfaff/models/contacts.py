@@ -79,29 +79,41 @@ def bouncing_ball(
     """A ball (a particle) over a floor: q = (x, y), y up, V = m g y, the unilateral constraint
     ``"floor"`` y ≥ 0 with Newton's restitution e.
 
-    Dropped from rest at height h it hits the floor at t₁ = √(2h/g) and then at
-    t_{k+1} = t_k + 2 eᵏ √(2h/g), coming to rest at t∞ = t₁ (1 + e)/(1 − e).
+    Dropped from rest at height h (:func:`bouncing_ball_state`) it hits the floor at
+    t₁ = √(2h/g) and then at t_{k+1} = t_k + 2 eᵏ √(2h/g), coming to rest at
+    t∞ = t₁ (1 + e)/(1 − e).
 
     Parameters
     ----------
     restitution : float, sympy expression or None
-        e in [0, 1]; None (or ``"e"``) makes it the parameter ``e``.
+        A number in [0, 1] is the default value of the parameter ``e`` (``compile`` may give
+        another); a SymPy expression is used as the restitution itself; None leaves ``e``
+        without a default.
+    mass, gravity : optional
+        Numbers or expressions for m and g (default: the parameters ``m``, ``g``).
 
     Examples
     --------
     >>> import pfaff
-    >>> [str(p) for p in pfaff.models.bouncing_ball().parameters]
-    ['g', 'm']
-    >>> [str(p) for p in pfaff.models.bouncing_ball(None).parameters]
-    ['e', 'g', 'm']
+    >>> ball = pfaff.models.bouncing_ball()
+    >>> [str(p) for p in ball.parameters], ball.parameter_defaults
+    (['e', 'g', 'm'], {'e': 0.8})
+    >>> model = ball.equations().compile({"m": 1, "g": 9.81})  # e = 0.8
     """
     m, g = _param(mass, "m", "mass"), _param(gravity, "g", "gravity")
-    e = _param(restitution, "e", "restitution")
+    default = None
+    if restitution is not None and not isinstance(restitution, sp.Basic | str):
+        default = real_number(restitution, "restitution", ModelError)
+        if not 0.0 <= default <= 1.0:
+            raise ModelError(f"`restitution` must be in [0, 1], got {default}")
+    e = _param(None if default is not None else restitution, "e", "restitution")
     x, y = coordinates("x y")
     s = System([x, y], name="bouncing ball")
     s.add_particle(m, [x, y], name="ball")
     s.add_potential_energy(m * g * y, name="gravity")
     s.add_unilateral_constraint(y, name="floor", restitution=e)
+    if default is not None:
+        s.set_parameter_defaults({e: default})
     return s
 
 
