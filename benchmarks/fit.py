@@ -33,16 +33,28 @@ against the estimate recorded in that test. Run from the project root::
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import resource
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
 import pfaff
 
-DATA = Path(__file__).parents[1] / "tests" / "data" / "vyasarayani_pendulum.csv"
-RECORDED_OPTY_P = 9.998575673543222  # tests/api/test_fit_vyasarayani.py
-WINDOWS = (0.5, 2.0, 10.0, 50.0)
+
+def _reference() -> ModuleType:
+    """``tests/api/test_fit_vyasarayani.py``: the data's path, opty's recorded estimate and the
+    windowed fit, kept in one place."""
+    path = Path(__file__).parents[1] / "tests" / "api" / "test_fit_vyasarayani.py"
+    spec = importlib.util.spec_from_file_location("test_fit_vyasarayani", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+REFERENCE = _reference()
 
 
 def cpu() -> float:
@@ -91,7 +103,7 @@ def opty_cases(t: np.ndarray, angle: np.ndarray, rate: np.ndarray, guess: float)
 
 
 def pfaff_cases(t: np.ndarray, angle: np.ndarray, guess: float) -> dict:
-    """``build`` and ``fit`` of pfaff; the fit returns (p, θ(0), θ̇(0))."""
+    """``build`` and ``fit`` of pfaff (the test's windowed fit); the fit returns (p, θ(0), θ̇(0))."""
     values = {"m": 1.0, "l": 1.0, "g": guess, "c": 0.0}
 
     def build():
@@ -100,16 +112,10 @@ def pfaff_cases(t: np.ndarray, angle: np.ndarray, guess: float) -> dict:
     model = build()
 
     def fit():
-        est = {"g": guess, "q0.theta": float(angle[0]), "qd0.theta": 0.0}
-        for end in WINDOWS:
-            k = t <= end + 1e-9
-            res = pfaff.fit(
-                model.with_parameters({"g": est["g"]}), t[k], angle[k], est, ["theta"],
-                [angle[0]], [0.0], bounds={"g": (1e-3, None)}, rtol=1e-8, atol=1e-12,
-            )  # fmt: skip
-            if res.status != "success":
-                raise RuntimeError(f"pfaff.fit did not converge: {res.message}")
-            est = res.estimates
+        res = REFERENCE.fit_in_windows(model, t, angle, guess)
+        if res.status != "success":
+            raise RuntimeError(f"pfaff.fit did not converge: {res.message}")
+        est = res.estimates
         return est["g"], est["q0.theta"], est["qd0.theta"]
 
     return {"build": build, "fit": fit}
@@ -133,7 +139,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--guess", type=float, default=50.0, help="the starting guess of p")
     args = ap.parse_args()
-    t, angle, rate = np.loadtxt(DATA, delimiter=",", skiprows=1).T
+    t, angle, rate = np.loadtxt(REFERENCE.DATA, delimiter=",", skiprows=1).T
     tools = {}
     try:
         import opty
@@ -152,16 +158,16 @@ def main() -> None:
         o = med.get(("opty", case), np.nan)
         f = med["pfaff", case]
         print(f"{case:<8}{o:>10.3f}{f:>10.3f}{f / o:>12.2f}")
-    reference = results["opty"][0] if "opty" in results else RECORDED_OPTY_P
+    reference = results["opty"][0] if "opty" in results else REFERENCE.OPTY_P
     print(f"\n{'tool':<8}{'p':>14}{'y1(0)':>12}{'y2(0)':>12}")
     for tool, (p, a0, r0) in results.items():
         print(f"{tool:<8}{p:>14.9f}{a0:>12.7f}{r0:>12.7f}")
     p = results["pfaff"][0]
     source = "this run" if "opty" in results else "recorded"
-    print(f"\nopty ({source}) / pfaff − 1 = {reference / p - 1:.3e} (check: |.| ≤ 1e-3); ")
+    print(f"\nopty ({source}) / pfaff − 1 = {reference / p - 1:.3e} (check: |.| ≤ 1e-3)")
     print(f"the midpoint rule's lag p h²/6 = {p * h**2 / 6:.3e}")
     if "opty" in results:
-        print(f"opty this run / recorded − 1 = {results['opty'][0] / RECORDED_OPTY_P - 1:.1e}")
+        print(f"opty this run / recorded − 1 = {results['opty'][0] / REFERENCE.OPTY_P - 1:.1e}")
 
 
 if __name__ == "__main__":
