@@ -283,7 +283,8 @@ def _report(
         q, qd = traj.q[i], traj.qd[i]
         Si = tangent_project(setup.kernel, _state_x(field, t, q, qd), setup.records[float(t)])
         S[i] = Si
-        S_lam[i] = field.solve(float(t), np.concatenate((q, qd, Si.ravel())))[2]
+        if m:  # (no constraint: no multiplier, and one KKT solve per reported time saved)
+            S_lam[i] = field.solve(float(t), np.concatenate((q, qd, Si.ravel())))[2]
     names = list(traj.coordinate_names)
     labels = pnames + ([f"q0.{c}" for c in names] + [f"qd0.{c}" for c in names]) * initial
     return SensitivityTrajectory.of(
