@@ -12,6 +12,7 @@ import types
 __all__ = [
     "ConstraintError",
     "InertiaError",
+    "LongRunWarning",
     "ModelError",
     "ModelTypeError",
     "OptionError",
@@ -73,6 +74,11 @@ class RedundancyWarning(UserWarning):
     """Some constraints depend on one another: the motion is still determined, but on those rows
     only Aᵀλ is; pfaff reports the minimum-norm multipliers (``model.redundancy`` names the
     indeterminate directions)."""
+
+
+class LongRunWarning(UserWarning):
+    """A run without ``t_eval`` whose recorded states, at its measured pace, would need more memory
+    than is reasonable (the estimate is in the message): pass ``t_eval`` to bound it."""
 
 
 class SimulationError(PfaffError, RuntimeError):
