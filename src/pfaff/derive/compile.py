@@ -20,7 +20,7 @@ import numpy as np
 import sympy as sp
 
 from pfaff.core.errors import ParameterError
-from pfaff.core.symbols import local_qd
+from pfaff.core.symbols import local_qd, name_clash
 from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.events import compile_events
@@ -43,6 +43,9 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
         raise ParameterError(
             f"`parameters` must be a dict of symbol (or name) -> value, got {given!r}"
         )
+    clash = name_clash(params)  # equations given as matrices: nothing checked them before
+    if clash is not None:
+        raise ParameterError(f"bad parameters: {clash}")
     by_name = {p.name: p for p in params}
     values: dict[sp.Symbol, object] = {}
     problems = []
