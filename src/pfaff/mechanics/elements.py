@@ -191,7 +191,7 @@ class ElementsMixin:
             raise ModelTypeError("`on` must be a Body of this system (from add_rigid_body)")
         label = self._label(name, "torque")
         exprs = torque_exprs(on, torque, frame, f"torque `{label}`")
-        coords = self._scan(exprs, f"torque `{label}`", speeds=True)
+        coords = self._scan(exprs, f"torque `{label}`", speeds=True, smooth=False)
         self._add("torque", exprs, coords, label, 3)
 
     def add_spring(

@@ -86,7 +86,7 @@ class EventsMixin:
         e = as_expr(condition, what)
         known = set(self._parameters)
         try:
-            coords = self._scan((e,), what, speeds=True)
+            coords = self._scan((e,), what, speeds=True, smooth=False)
         finally:
             unknown = sorted(s.name for s in self._parameters - known)
             self._parameters = known

@@ -31,6 +31,7 @@ from pfaff.core.symbols import (
 from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
+from pfaff.mechanics.smooth import kinks
 
 PIECE_KINDS = (
     "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
@@ -236,13 +237,15 @@ class SystemSpec(ElementsMixin, EventsMixin):
         *,
         speeds: bool,
         refs: dict | None = None,
+        smooth: bool = True,
     ) -> tuple[int, ...]:
-        """Indices of the coordinates the expressions involve; reject foreign functions of time.
+        """Indices of the coordinates the expressions involve; reject foreign functions of time
+        (and, for ``smooth`` terms, those the derivation differentiates, kinks of the state).
 
         Family references (``theta[k]``) are collected into ``refs`` (function -> Ref) when given.
         """
         used: set[int] = set()
-        problems: list[str] = []
+        problems: list[str] = kinks(exprs) if smooth else []
         for e in exprs:
             atoms = e.atoms(sp.Derivative, AppliedUndef, sp.Symbol)
             derivs = [a for a in atoms if isinstance(a, sp.Derivative)]
@@ -524,7 +527,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         if len(f) != len(r):
             raise ModelError(f"force `{label}` has {len(f)} components but its point has {len(r)}")
         refs = self._refs(over)
-        cf = self._scan(f, f"force `{label}`", speeds=True, refs=refs)
+        cf = self._scan(f, f"force `{label}`", speeds=True, refs=refs, smooth=False)
         cr = self._scan(r, f"point of force `{label}`", speeds=False, refs=refs)
         coords = tuple(sorted(set(cf) | set(cr)))
         self._add("force", (*f, *r), coords, label, len(f), over)
@@ -549,7 +552,10 @@ class SystemSpec(ElementsMixin, EventsMixin):
         e = as_expr(expr, f"generalized force `{label}`")
         j = self._index[coordinate]
         coords = tuple(
-            sorted(set(self._scan((e,), f"generalized force `{label}`", speeds=True)) | {j})
+            sorted(
+                set(self._scan((e,), f"generalized force `{label}`", speeds=True, smooth=False))
+                | {j}
+            )
         )
         self._add("genforce", (e,), coords, label, coords.index(j))
 

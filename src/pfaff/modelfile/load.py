@@ -181,10 +181,15 @@ def _read(p: Path, max_bytes: int) -> dict:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise ModelFileError(f"{where}: not UTF-8 text (byte {e.start})") from None
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark (some editors write one)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ModelFileError(f"{where}: not valid TOML: {e}") from None
+    except ValueError as e:  # Python's own limit on the digits of an integer
+        raise ModelFileError(
+            f"{where}: a number has more digits than Python reads ({str(e).split(';')[0]})"
+        ) from None
     except RecursionError:
         raise ModelFileError(f"{where}: nested too deeply") from None
 
