@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 import warnings
 from typing import Any
@@ -11,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from pfaff.cli.argtypes import positive, whole
+from pfaff.cli.jsontext import dumps
 from pfaff.core.errors import RedundancyWarning
 
 RUN_FLAGS = ("t_end", "method", "rtol", "atol")
@@ -99,7 +99,7 @@ def run_equations(args: argparse.Namespace) -> int:
         "redundant_sets": [list(x) for x in eom.redundant_sets],
     }
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     elif args.latex:
         print(eom.latex())
     else:
@@ -184,7 +184,7 @@ def run_model(args: argparse.Namespace) -> int:
         traj.animate(args.animate, frames=args.frames)
         rep["animate"] = args.animate
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(_run_text(rep))
     return 0 if traj.status == "success" else 3

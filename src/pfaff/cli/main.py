@@ -13,13 +13,13 @@ unexpected (``--debug`` shows its traceback).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
 
 from pfaff.cli.argtypes import finite, positive, whole
+from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import guarded
 from pfaff.core.errors import OptionError
 
@@ -139,7 +139,7 @@ def run_bicycle(args: argparse.Namespace) -> int:
     if not math.isfinite(args.speed):
         raise OptionError(f"--speed must be finite; got {args.speed}")
     rep = bicycle_report(args.speed, args.plot)
-    print(json.dumps(rep, indent=1) if args.json else format_bicycle(rep))
+    print(dumps(rep) if args.json else format_bicycle(rep))
     return 0
 
 
@@ -158,7 +158,7 @@ def run_body_demo(args: argparse.Namespace) -> int:
         rep["plot"] = args.plot
     _write_animation(traj, args, rep)
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(bodydemo.format_body(rep))
         for key in ("plot", "animate"):
@@ -255,6 +255,28 @@ def check_files(args: argparse.Namespace) -> None:
 
         _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
         check_path(args.animate)
+    _distinct_files(args)
+
+
+def _distinct_files(args: argparse.Namespace) -> None:
+    """Refuse two outputs of one command that are one file (the second would overwrite the
+    first), and outputs that are devices or pipes (never replaced by a file)."""
+    from pfaff.core.files import special_kind
+
+    seen: dict[str, str] = {}
+    for flag in ("output", "plot", "animate"):
+        path = getattr(args, flag, None)
+        if not path:
+            continue
+        kind = special_kind(Path(path))
+        if kind is not None:
+            raise OptionError(f"--{flag} {path!r} is {kind}, not a regular file: give a file name")
+        real = os.path.realpath(path)
+        if real in seen:
+            raise OptionError(
+                f"--{seen[real]} and --{flag} are the same file {path!r}: give each its own name"
+            )
+        seen[real] = flag
 
 
 def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
@@ -298,7 +320,7 @@ def run_simulation(args: argparse.Namespace) -> int:
         )
     _write_outputs(traj, args, rep, simulation_units(args.demo, traj))
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(format_simulation(rep))
         for key in ("output", "plot", "animate"):
@@ -328,7 +350,7 @@ def run_ring(args: argparse.Namespace) -> int:
         rep["plot"] = args.plot
     rep.pop("_arrays")
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(format_report(rep))
         if args.plot:
@@ -359,7 +381,7 @@ def run_pendulum(args: argparse.Namespace) -> int:
         "tension_exact": args.mass * args.gravity * math.cos(a),
     }
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print("Cartesian pendulum, q = (x, y):")
         for e in rep["equations"]:
