@@ -75,6 +75,27 @@ def test_constant_and_time_inputs_against_closed_forms() -> None:
     assert abs(tr.energy_balance).max() < 1e-9
 
 
+def test_a_law_that_changes_its_arguments_leaves_the_run_alone() -> None:
+    """u(t, q, q̇) = −k q on a unit mass (ẍ = −k x: x = cos(√k t)), the law zeroing its q and
+    q̇ in place after reading them: the run gets the same cosine as a well-behaved law."""
+    x = pfaff.coordinates("x")
+    s = pfaff.System([x])
+    s.add_particle(1, [x, 0])
+    u = s.add_input("u")
+    s.add_generalized_force(x, u)
+    model = s.equations().compile({})
+
+    def vandal(_t, q, qd):
+        value = -4.0 * float(q[0])
+        q[:] = 0.0
+        qd[:] = 0.0
+        return value
+
+    ts = np.linspace(0, 2, 5)
+    tr = pfaff.simulate(model, [1.0], [0.0], (0, 2), t_eval=ts, inputs={"u": vandal}, rtol=1e-11)
+    np.testing.assert_allclose(tr.q[:, 0], np.cos(2.0 * ts), atol=1e-8)
+
+
 def test_bad_inputs() -> None:
     x = pfaff.coordinates("x")
     s = pfaff.System([x])
