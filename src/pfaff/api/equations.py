@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pfaff.core.errors import ModelError, OptionError
+from pfaff.core.keywords import checked_keywords
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.equations import Derivation, Solution
@@ -58,6 +59,7 @@ class EquationsOfMotion(Derivation):
     Eq(g*m + m*Derivative(y(t), (t, 2)), 2*lambda1*y(t))
     """
 
+    @checked_keywords
     def compile(
         self,
         parameters: dict | None = None,
@@ -109,6 +111,7 @@ class EquationsOfMotion(Derivation):
             return compile_structured(self, parameters or {}, solver=solver)
         return compile_equations(self, parameters or {}, solver=solver, evaluator=evaluator)
 
+    @checked_keywords
     def linearize(
         self,
         op_point: dict,

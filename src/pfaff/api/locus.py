@@ -9,6 +9,7 @@ import numpy as np
 import sympy as sp
 
 from pfaff.core.errors import ModelError, ModelTypeError
+from pfaff.core.keywords import checked_keywords
 from pfaff.derive.linearize import linearize
 
 if TYPE_CHECKING:
@@ -55,6 +56,7 @@ def _point(op_point: dict | Callable, name: str, value: float, params: set[str])
     return out
 
 
+@checked_keywords
 def root_locus(
     eom: Derivation,
     op_point: dict | Callable,

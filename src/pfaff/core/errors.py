@@ -12,6 +12,7 @@ import types
 __all__ = [
     "ConstraintError",
     "InertiaError",
+    "KeywordError",
     "LongRunWarning",
     "ModelError",
     "ModelTypeError",
@@ -68,6 +69,11 @@ class OptionError(PfaffError):
     Not a :class:`StateError`: a state is what a run starts from or computes, an option how it
     is computed.
     """
+
+
+class KeywordError(OptionError, TypeError):
+    """A public function or method was called with a keyword it does not have (named, with the
+    closest valid one and the full list). Also a ``TypeError``, as Python's own would be."""
 
 
 class RedundancyWarning(UserWarning):

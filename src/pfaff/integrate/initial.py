@@ -8,6 +8,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError, StateError
+from pfaff.core.keywords import checked_keywords
 from pfaff.numeric.checks import check_model, check_state, projection_options
 from pfaff.numeric.projection import ArrayLinearization, newton_projection
 from pfaff.numeric.protocol import DynamicsModel
@@ -42,6 +43,7 @@ def _dense(A: np.ndarray | sps.spmatrix) -> np.ndarray:
     return A.toarray() if sps.issparse(A) else np.asarray(A)
 
 
+@checked_keywords
 def consistent_state(
     model: DynamicsModel,
     q: Sequence[float] | np.ndarray,

@@ -21,7 +21,7 @@ import warnings
 import numpy as np
 
 from pfaff.core.errors import LongRunWarning
-from pfaff.derive.memory import available_bytes
+from pfaff.core.memory import available_bytes
 from pfaff.integrate.stepper import _RunFailure
 
 WINDOW = 200  # steps over which the pace is measured

@@ -27,6 +27,7 @@ from pfaff.core.errors import (
     undefined_at,
 )
 from pfaff.core.events import Event, EventRecord
+from pfaff.core.keywords import checked_keywords
 from pfaff.integrate.events import SINGULAR, AttitudeEvents, UserEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
@@ -212,6 +213,7 @@ def _onto_constraints(
     return q, qd
 
 
+@checked_keywords
 def simulate(
     model: DynamicsModel,
     q0: Sequence[float] | np.ndarray,

@@ -14,6 +14,7 @@ import sympy as sp
 
 from pfaff.core.errors import ModelError, PfaffError
 from pfaff.core.events import event_direction, event_terminal
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.symbols import as_expr
 
 if TYPE_CHECKING:
@@ -37,6 +38,7 @@ class EventsMixin:
 
     events: list[EventSpec]
 
+    @checked_keywords
     def add_event(
         self: SystemSpec,
         condition: object,

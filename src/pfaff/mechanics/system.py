@@ -17,6 +17,7 @@ from sympy.core.function import AppliedUndef
 from sympy.physics.vector import Vector
 
 from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.lazy import LazySeq, NumberedNames, concat
 from pfaff.core.symbols import (
     as_expr,
@@ -161,6 +162,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         """Number of generalized coordinates."""
         return len(self._ordinary) + sum(f.n for f in self.families)
 
+    @checked_keywords
     def add_family(self, name: str, n: int, *, first: int = 0) -> Family:
         """Append an indexed family of n coordinates ``name{first}`` … ``name{first+n-1}``.
 
@@ -407,6 +409,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         return name or f"{kind}{self._counts.get(kind, self.n_constraints) + 1}"
 
     # ------------------------------------------------------------------ building the model
+    @checked_keywords
     def add_particle(
         self,
         mass: object,
@@ -452,6 +455,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         coords = self._scan(r, f"position of particle `{label}`", speeds=False, refs=refs)
         self._add("particle", (m, *r), coords, label, len(r), over)
 
+    @checked_keywords
     def add_kinetic_energy(
         self, expr: object, *, name: str | None = None, over: object = None
     ) -> None:
@@ -473,6 +477,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
             raise ModelError(f"kinetic energy `{label}` involves no coordinate: {e}")
         self._add("kinetic", (e,), coords, label, over=over)
 
+    @checked_keywords
     def add_potential_energy(
         self, expr: object, *, name: str | None = None, over: object = None
     ) -> None:
@@ -493,6 +498,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         if coords or refs:
             self._add("potential", (e,), coords, label, over=over)
 
+    @checked_keywords
     def add_force(
         self,
         force: object,
@@ -532,6 +538,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         coords = tuple(sorted(set(cf) | set(cr)))
         self._add("force", (*f, *r), coords, label, len(f), over)
 
+    @checked_keywords
     def add_generalized_force(
         self, coordinate: object, expr: object, *, name: str | None = None
     ) -> None:
@@ -559,6 +566,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         )
         self._add("genforce", (e,), coords, label, coords.index(j))
 
+    @checked_keywords
     def add_holonomic_constraint(
         self, expr: object, name: str | None = None, *, over: object = None
     ) -> None:
@@ -583,6 +591,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         self._check_new_constraint(e, local, coords, label, tmpl)
         self._add("holonomic", (e,), coords, label, local=local, template=tmpl)
 
+    @checked_keywords
     def add_velocity_constraint(
         self, expr: object, name: str | None = None, *, over: object = None
     ) -> None:

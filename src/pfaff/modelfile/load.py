@@ -59,6 +59,7 @@ import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.safe_expr import (
     ExpressionError,
     check_name,
@@ -122,6 +123,7 @@ class ModelFile:
         return self.system.equations().compile({k: v for k, v in values.items() if k in used})
 
 
+@checked_keywords
 def load_model(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> ModelFile:
     """Read a model file (TOML) into a :class:`ModelFile`; nothing in the file is executed.
 

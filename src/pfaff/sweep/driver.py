@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from pfaff.core.errors import OptionError, PfaffError
+from pfaff.core.keywords import checked_keywords
 from pfaff.modelfile import ModelFile, load_model
 from pfaff.sweep.grid import make_grid
 from pfaff.sweep.result import Results
@@ -39,6 +40,7 @@ SYNC = ("synchronous", "sync")
 PASSED = ("t_end", "samples")  # [simulate] keys the sweep uses itself, not pfaff.simulate
 
 
+@checked_keywords
 def sweep(
     model: str | os.PathLike | ModelFile,
     vary: Mapping[str, Sequence[float] | np.ndarray],
