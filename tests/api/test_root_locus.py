@@ -49,5 +49,5 @@ def test_vary_refuses_strings_and_names_the_model_lacks() -> None:
     for bad in (["1", "4"], [True, False], [1 + 2j]):
         with pytest.raises(pfaff.ModelTypeError, match=r"`vary\['g'\]` must be real numbers"):
             pfaff.root_locus(eom, {th: 0, "m": 1, "L": 1}, [th], vary={"g": bad})
-    with pytest.raises(pfaff.ModelError, match="`k` is not a parameter of the model .*L, g, m"):
+    with pytest.raises(pfaff.ModelError, match=r"`k` is not a parameter of the model .*L, g, m"):
         pfaff.root_locus(eom, point, [th], vary={"k": [1.0, 2.0]})

@@ -8,6 +8,7 @@ import os
 import stat
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from pfaff.cli.jsontext import dumps
@@ -63,3 +64,22 @@ def test_a_named_pipe_or_device_is_never_replaced(
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
     assert stat.S_ISCHR(os.stat(os.devnull).st_mode) and dev.is_symlink()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dev.csv", "run.csv"]  # no temp file
+
+
+def test_huge_samples_and_grids_refused_before_allocating(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """10**12 reported times (4.7e14 bytes of states) or a 10**9-run grid: refused with the
+    estimate before anything of that size exists (was a MemoryError, or gigabytes first)."""
+    import pfaff
+
+    assert main(["run", EXAMPLE, "--samples", str(10**12)]) == 2
+    err = capsys.readouterr().err
+    assert f"--samples {10**12} would need about" in err and "GiB" in err
+    with pytest.raises(pfaff.OptionError, match="a sweep of 1000000000 runs of 1000 samples"):
+        pfaff.sweep(
+            EXAMPLE,
+            {"g": np.linspace(1, 10, 100_000), "L": np.linspace(1, 2, 10_000)},
+            samples=1000,
+            scheduler="synchronous",
+        )

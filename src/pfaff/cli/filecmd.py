@@ -163,6 +163,15 @@ def run_model(args: argparse.Namespace) -> int:
     if t_end is None:
         raise OptionError(f"{args.model}: no end time: give --t-end or [simulate] t_end")
     samples = settings.pop("samples", None)
+    if samples:
+        from pfaff.core.memory import refuse_beyond
+        from pfaff.integrate.pace import state_bytes
+
+        refuse_beyond(
+            samples * state_bytes(mf.system.n, mf.system.n_constraints),
+            f"--samples {samples}",
+            "report fewer times",
+        )
     with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
         warnings.simplefilter("ignore", RedundancyWarning)
         model = mf.compile()

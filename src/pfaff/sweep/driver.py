@@ -27,6 +27,7 @@ import numpy as np
 
 from pfaff.core.errors import OptionError, PfaffError
 from pfaff.core.keywords import checked_keywords
+from pfaff.core.memory import refuse_beyond
 from pfaff.modelfile import ModelFile, load_model
 from pfaff.sweep.grid import make_grid
 from pfaff.sweep.result import Results
@@ -139,6 +140,11 @@ def sweep(
     grid = make_grid(vary, list(mf.parameters), coordinates)
     t_end = _end_time(mf, t_end)
     samples = _samples(mf, samples)
+    refuse_beyond(  # the results: q and q̇ of every run at every reported time
+        16.0 * grid.size * samples * max(len(coordinates), 1),
+        f"a sweep of {grid.size} runs of {samples} samples",
+        "vary fewer values, or report fewer samples",
+    )
     options = {k: v for k, v in mf.simulate.items() if k not in PASSED}
     spec = SweepSpec(
         text=text,
