@@ -323,6 +323,8 @@ def _reachable(address: str, timeout: float = 5.0) -> None:
             f"`scheduler`: {address!r:.80} is not a scheduler address tcp://host:port (for TLS "
             "or another protocol, pass a distributed.Client) or 'synchronous'"
         )
+    if not 0 < int(port) < 65536:
+        raise OptionError(f"`scheduler`: the port {int(port)} of {address!r:.80} is not 1-65535")
     with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
         pass
 
