@@ -179,6 +179,9 @@ def initial_state(
     t0, q, qd = check_state(t0, q0, qd0, model.n, names, ("t0", "q0", "qd0"))
     if model.m:
         q, qd = _onto_constraints(model, t0, q, qd, projector, opts)
+    lock = AttitudeEvents(model.attitudes).singular(q)
+    if lock is not None:  # (M is singular there too: name the cause, not the symptom)
+        raise StateError(f"the initial state is at a singular attitude: {lock}")
     model.check_determined(t0, q, qd)
     return q, qd
 
