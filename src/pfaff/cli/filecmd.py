@@ -11,6 +11,7 @@ import numpy as np
 
 from pfaff.cli.argtypes import positive, whole
 from pfaff.cli.jsontext import dumps
+from pfaff.cli.signals import stage, verbose
 from pfaff.core.errors import RedundancyWarning
 
 RUN_FLAGS = ("t_end", "method", "rtol", "atol")
@@ -53,6 +54,7 @@ def _load(args: argparse.Namespace) -> Any:
     from pfaff.modelfile import load_model
 
     kw = {} if args.max_bytes is None else {"max_bytes": args.max_bytes}
+    stage("loading")
     return load_model(args.model, **kw)
 
 
@@ -61,9 +63,11 @@ def run_equations(args: argparse.Namespace) -> int:
     from pfaff.modelfile.printer import file_syntax, matrix_syntax
 
     mf = _load(args)
+    stage("deriving")
     with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
         warnings.simplefilter("ignore", RedundancyWarning)
         eom = mf.system.equations()
+    stage("printing")
     coords = list(eom.coordinates)
     lagrange = [
         f"{file_syntax(e.lhs, coords)} = {file_syntax(e.rhs, coords)}"
@@ -174,14 +178,19 @@ def run_model(args: argparse.Namespace) -> int:
         )
     with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
         warnings.simplefilter("ignore", RedundancyWarning)
+        stage("deriving and compiling")
         model = mf.compile()
         t_eval = np.linspace(0.0, t_end, samples) if samples else None
+        stage("simulating")
+        if verbose():
+            settings.setdefault("progress", True)
         start = time.perf_counter()
         traj = simulate(model, mf.q0, mf.qd0, (0.0, t_end), t_eval=t_eval, **settings)
         wall = time.perf_counter() - start
     rep = _run_report(mf, traj, wall)
     rep["redundant_rows"] = int(np.max(traj.redundant_rows, initial=0))
     rep["redundant_sets"] = _run_redundancy(model, traj)
+    stage("writing")
     if args.output:
         suffix = args.output.rsplit(".", 1)[-1].lower()
         (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)

@@ -21,6 +21,7 @@ from pathlib import Path
 from pfaff.cli.argtypes import finite, positive, whole
 from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import guarded
+from pfaff.cli.signals import stage
 from pfaff.core.errors import OptionError
 
 # the simulation options imply --simulate when given; these are their defaults
@@ -335,7 +336,7 @@ def run_ring(args: argparse.Namespace) -> int:
 
     if args.simulate:
         return run_simulation(args)
-
+    stage("deriving and solving")
     rep = ring_report(
         args.particles,
         force=args.force,
