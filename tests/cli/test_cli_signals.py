@@ -16,6 +16,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import pfaff
@@ -119,3 +120,34 @@ def test_subprocess_run_interrupted_mid_simulation_writes_its_points(tmp_path, s
     times = [float(r[0]) for r in rows[1:]]
     assert len(times) >= 2 and times[0] == 0.0 and times[-1] < 1e7
     assert [p.name for p in tmp_path.iterdir()] == ["long.csv"]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_sweep_interrupted_writes_the_runs_it_has(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path, sig
+) -> None:
+    """The signal arrives as the second of four runs starts: the first is kept (a success), the
+    others are marked; the file is written and the exit is 3."""
+    import xarray as xr
+
+    from pfaff.sweep import worker
+
+    calls = {"n": 0}
+    real = worker.simulate
+
+    def second_signals(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            os.kill(os.getpid(), sig)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(worker, "simulate", second_signals)
+    out = tmp_path / "sweep.nc"
+    argv = ["sweep", EXAMPLE, "--vary", "g=9:10:4", "--scheduler", "synchronous", "--samples",
+            "5", "--t-end", "1", "--output", str(out)]  # fmt: skip
+    assert main(argv) == 3
+    assert "pfaff: interrupted" in capsys.readouterr().err
+    ds = xr.open_dataset(out)
+    assert ds.attrs["status"] == "interrupted"
+    assert list(ds["status"].values) == ["success", "interrupted", "interrupted", "interrupted"]
+    assert np.isfinite(ds["q"].values[0]).all() and np.isnan(ds["q"].values[2:]).all()

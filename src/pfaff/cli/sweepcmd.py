@@ -105,6 +105,9 @@ def _sweep(args: argparse.Namespace) -> int:
         "output": args.output,
     }
     print(dumps(rep, indent=None) if args.json else _text(rep))
+    if ds.attrs.get("status") == "interrupted":  # the runs done are written and reported
+        print("pfaff: interrupted: the runs done are kept, the others marked", file=sys.stderr)
+        return 3
     return 0
 
 

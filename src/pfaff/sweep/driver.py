@@ -90,7 +90,9 @@ def sweep(
         multiplier), NaN past the end of a failed run, and per run ``status`` ("success",
         "failed", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
         ``constraint_residual`` (max |f|, |A q̇ + b|) and ``seconds``. Attributes: the model,
-        ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``.
+        ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``,
+        and ``status``: "complete", or "interrupted" after Ctrl-C or SIGTERM (the cluster shut
+        down, the runs done kept, the others with status "interrupted" and NaN states).
 
     Raises
     ------
@@ -254,13 +256,25 @@ def _execute(
     """Run every grid point into ``results``; how it ran (for the dataset's attributes)."""
     from tqdm.auto import tqdm
 
-    with tqdm(total=spec.grid.size, disable=not show, unit="run", desc="sweep") as bar:
-        if isinstance(scheduler, str) and scheduler in SYNC:
-            for batch in _chunks(range(spec.grid.size), max(1, spec.grid.size // 100)):
-                bar.update(results.add(run_batch(spec, batch)))
-            return {"scheduler": "synchronous", "workers": 1, "batch": 0}
-        with _ClientContext(scheduler, workers, spec.grid.size) as client:
-            return _distributed(client, spec, results, bar)
+    sync = isinstance(scheduler, str) and scheduler in SYNC
+    info = {
+        "scheduler": "synchronous" if sync else str(scheduler or "local"),
+        "workers": 1,
+        "batch": 0,
+    }
+    try:
+        with tqdm(total=spec.grid.size, disable=not show, unit="run", desc="sweep") as bar:
+            if sync:
+                for batch in _chunks(range(spec.grid.size), max(1, spec.grid.size // 100)):
+                    bar.update(results.add(run_batch(spec, batch)))
+                return {**info, "status": "complete"}
+            with _ClientContext(scheduler, workers, spec.grid.size) as client:
+                return {**_distributed(client, spec, results, bar), "status": "complete"}
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster is shut down (the context's
+        left = results.status == ""  # exit); the runs done are kept, the rest marked
+        results.status[left] = "interrupted"
+        results.message[left] = "not run: the sweep was interrupted"
+        return {**info, "status": "interrupted"}
 
 
 class _ClientContext:
