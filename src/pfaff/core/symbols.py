@@ -166,13 +166,13 @@ def accel(q: sp.Function) -> sp.Derivative:
 def name_clash(symbols: Iterable[sp.Symbol]) -> str | None:
     """The problem when two different symbols share a name (other assumptions), else None.
 
-    A model's parameters are given values by name, so ``Symbol("m", positive=True)`` and
-    ``Symbol("m")`` in one model would be two parameters no value could tell apart.
+    A model's parameters are given values by name or by Symbol: with ``Symbol("m",
+    positive=True)`` and ``Symbol("m")`` in one model, the name ``"m"`` does not say which.
 
     Examples
     --------
     >>> name_clash([sp.Symbol("m", positive=True), sp.Symbol("g"), sp.Symbol("m")])
-    'two different symbols are both named `m` (assumptions positive=True and none): use one symbol for one parameter'
+    'two different symbols are both named `m` (assumptions positive=True and none)'
     """
     seen: dict[str, sp.Symbol] = {}
     for s in symbols:
@@ -181,7 +181,7 @@ def name_clash(symbols: Iterable[sp.Symbol]) -> str | None:
             first, second = sorted((_given(other), _given(s)), key=lambda a: a == "none")
             return (
                 f"two different symbols are both named `{s.name}` (assumptions {first} and "
-                f"{second}): use one symbol for one parameter"
+                f"{second})"
             )
     return None
 

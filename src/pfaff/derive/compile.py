@@ -43,13 +43,14 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
         raise ParameterError(
             f"`parameters` must be a dict of symbol (or name) -> value, got {given!r}"
         )
-    clash = name_clash(params)  # equations given as matrices: nothing checked them before
-    if clash is not None:
-        raise ParameterError(f"bad parameters: {clash}")
     by_name = {p.name: p for p in params}
     values: dict[sp.Symbol, object] = {}
     problems = []
     for key, val in given.items():
+        if isinstance(key, str) and (clash := name_clash(p for p in params if p.name == key)):
+            problems.append(f"{clash}: give each its value by Symbol, or use one symbol")
+            values.update(dict.fromkeys((p for p in params if p.name == key), val))
+            continue
         sym = by_name.get(key) if isinstance(key, str) else key
         if sym not in params and isinstance(key, sp.Symbol):
             sym = by_name.get(key.name)  # the same name with other assumptions: the same parameter

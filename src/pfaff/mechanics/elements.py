@@ -94,11 +94,7 @@ class ElementsMixin:
                 f"{type(attitude).__name__}: a planar body turns by a PlanarAngle"
             )
         inertia_c = inertia_matrix(inertia, attitude, f"inertia of {what}")
-        problems: list[str] = []
-        for f in inertia_c.free_symbols - self._parameters - {t}:
-            self._add_parameter(f, problems)
-        if problems:
-            raise ModelError(f"inertia of {what}: " + "; ".join(problems))
+        self._parameters.update(inertia_c.free_symbols)
         body = Body(label, m, inertia_c, r, attitude)
         self.add_particle(m, list(r), name=label)  # the translation: m JᵀJ
         w = attitude.angular_velocity

@@ -24,7 +24,6 @@ from pfaff.core.symbols import (
     is_coordinate_like,
     local_q,
     local_qd,
-    name_clash,
     speed,
     t,
     validate_coordinates,
@@ -275,8 +274,8 @@ class SystemSpec(ElementsMixin, EventsMixin):
                     )
             for f in atoms:
                 if isinstance(f, sp.Symbol):
-                    if f != t and f not in self._parameters:
-                        self._add_parameter(f, problems)
+                    if f != t:
+                        self._parameters.add(f)
                 elif isinstance(f, AppliedUndef):
                     if (j := self._resolve(f)) is not None:
                         used.add(j)
@@ -290,14 +289,6 @@ class SystemSpec(ElementsMixin, EventsMixin):
         if problems:
             raise ModelError(f"{what}: " + "; ".join(dict.fromkeys(problems)))
         return tuple(sorted(used))
-
-    def _add_parameter(self, f: sp.Symbol, problems: list[str]) -> None:
-        """Add a parameter, unless another symbol of the model has its name."""
-        clash = name_clash([*(p for p in self._parameters if p.name == f.name), f])
-        if clash is None:
-            self._parameters.add(f)
-        else:
-            problems.append(clash)
 
     def _ref(self, f: AppliedUndef, refs: dict | None, problems: list[str]) -> Ref | None:
         ref = find_ref(self.families, f) if self.families else None
