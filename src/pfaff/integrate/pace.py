@@ -140,5 +140,6 @@ def _outside_pfaff() -> int:
 
 HINT = (
     "The equations may be discontinuous there (sign() or abs() of a velocity: Coulomb friction "
-    "chattering about q̇ = 0; smooth it, e.g. tanh(q̇/ε)) or stiff (try method='ida')"
+    "chattering about q̇ = 0; smooth it, e.g. tanh(q̇/ε)), stiff (try method='ida'), or "
+    "constrained where no state satisfies every constraint (a rheonomic one driving too far)"
 )
