@@ -50,3 +50,18 @@ def test_misspelled_keyword_is_named(pendulum: pfaff.NumericModel, k: int) -> No
 def test_valid_keywords_still_work(pendulum: pfaff.NumericModel) -> None:
     tr = pfaff.simulate(pendulum, [1, 0], [0, 0], t_span=(0, 0.5), rtol=1e-8, t_eval=[0.5])
     assert tr.status == "success"
+
+
+def test_every_public_function_names_a_misspelled_keyword() -> None:
+    """The keyword is checked before anything else, so no valid argument is needed."""
+    named = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    for name in pfaff.__all__:
+        fn = getattr(pfaff, name)
+        if not inspect.isfunction(fn) or name == "coordinates":  # (coordinates: one string)
+            continue
+        params = inspect.signature(fn).parameters.values()
+        if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
+            continue  # (fit: its **options go to simulate, which names a misspelled one)
+        with pytest.raises(pfaff.KeywordError, match=f"^{fn.__name__}\\(\\) got an unexpected"):
+            fn(zz_not_a_keyword=1)
+        assert any(p.kind in named for p in inspect.signature(fn).parameters.values())

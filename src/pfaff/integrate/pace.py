@@ -80,6 +80,11 @@ class Pace:
         self._count, self._start = 0, 0.0  # steps and start time of the current window
         self._warned = state_bytes is None
 
+    def restart(self) -> None:
+        """A new history from here (after an impact: the motion's time scale may change); the
+        steps taken still count towards ``max_steps``."""
+        self.largest, self._count = 0.0, 0
+
     def limit(self) -> None:
         """Before a step: fail when ``max_steps`` have been taken."""
         if self.max_steps is not None and self.steps >= self.max_steps:

@@ -441,7 +441,7 @@ def _run_contacts(
     contacts, cls, options, te, t0, t1, q0, qd0, progress, user, project_output, pace
 ):  # fmt: skip
     """A run with unilateral constraints: one :class:`_Run` per segment between contact
-    events (:func:`pfaff.integrate.contact.run_segments`), one :class:`Pace` over them all."""
+    events (:func:`pfaff.integrate.contact.run_segments`); one :class:`Pace` counts their steps."""
 
     def segment(model, t, q, qd, events):
         projector = Projector(model, tol=contacts.tol)
@@ -450,6 +450,7 @@ def _run_contacts(
         power = model.power_function() if model.applied_power else None
         run = _Run(stepper, projector if project_output else None, tes, t, t1, progress, power)
         run.events, run.user, run.pace = AttitudeEvents(model.attitudes), events, pace
+        pace.restart()  # each segment its own history; max_steps over them all
         run.restart = lambda t_, q_, qd_: cls(model, t_, q_, qd_, t1, options, projector)
         status, message = run.go(q, qd)
         return run, status, message, projector
