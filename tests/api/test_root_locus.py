@@ -38,3 +38,16 @@ def test_bad_vary() -> None:
         pfaff.root_locus(eom, {th: 0}, [th], vary={"g": [1], "L": [2]})
     with pytest.raises(pfaff.ModelError, match="finite"):
         pfaff.root_locus(eom, {th: 0}, [th], vary={"g": [np.inf]})
+
+
+def test_vary_refuses_strings_and_names_the_model_lacks() -> None:
+    """A string value used to be read as a number by NumPy, and a name the model does not have
+    gave the same eigenvalues at every value: both refused, named."""
+    eom = pfaff.models.pendulum().equations()
+    th = eom.coordinates[0]
+    point = {th: 0, "m": 1, "L": 1, "g": 4}
+    for bad in (["1", "4"], [True, False], [1 + 2j]):
+        with pytest.raises(pfaff.ModelTypeError, match=r"`vary\['g'\]` must be real numbers"):
+            pfaff.root_locus(eom, {th: 0, "m": 1, "L": 1}, [th], vary={"g": bad})
+    with pytest.raises(pfaff.ModelError, match=r"`k` is not a parameter of the model .*L, g, m"):
+        pfaff.root_locus(eom, point, [th], vary={"k": [1.0, 2.0]})

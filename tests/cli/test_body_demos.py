@@ -14,6 +14,7 @@ def _json(capsys, *argv: str) -> tuple[int, dict]:
     return code, json.loads(capsys.readouterr().out)
 
 
+@pytest.mark.slow  # an end-to-end run of the demo (the physics: tests/integrate)
 @pytest.mark.parametrize("attitude", ["quaternion", "mrp", "euler"])
 def test_tumble_period_and_invariants(capsys, attitude) -> None:
     code, rep = _json(capsys, "tumble", "--attitude", attitude)
@@ -25,12 +26,14 @@ def test_tumble_period_and_invariants(capsys, attitude) -> None:
         assert rep["sequence"] == "231"
 
 
+@pytest.mark.slow  # an end-to-end run of the demo (the physics: tests/integrate)
 def test_top_holds_its_precession(capsys) -> None:
     code, rep = _json(capsys, "top", "--attitude", "mrp")
     assert code == 0
     assert rep["nutation_max_deviation"] < 1e-8
 
 
+@pytest.mark.slow  # an end-to-end run of the demo (the physics: tests/integrate)
 def test_disk_normal_force_is_the_weight(capsys, tmp_path) -> None:
     png = tmp_path / "disk.png"
     code, rep = _json(capsys, "disk", "--t-end", "1", "--plot", str(png))

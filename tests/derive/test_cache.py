@@ -112,3 +112,70 @@ def test_concurrent_writers_never_show_a_partial_entry(folder) -> None:
         th.join()
     assert all(s in payloads for s in seen if s is not None)
     assert cache.load("c" * 64, "code") in payloads
+
+
+def _plant(where, key: str, kind: str, payload: bytes):
+    """A well-formed entry (right hash, right name) with a payload of someone else's."""
+    head = f"{cache.hashlib.sha256(payload).hexdigest()} {key}.{kind}\n".encode()
+    path = where / f"{key}.{kind}"
+    path.write_bytes(head + payload)
+    return path
+
+
+def test_an_entry_others_may_write_is_never_loaded(folder) -> None:
+    """A well-formed entry that group or others may write (planted while the folder was open
+    to them) is ignored: checked on the opened file's own status."""
+    key = "cd" * 32
+    cache.store(key, "code", b"ours")
+    assert cache.load(key, "code") == b"ours"
+    planted = _plant(folder, key, "code", b"theirs")
+    planted.chmod(0o666)
+    assert cache.load(key, "code") is None
+    planted.chmod(0o600)
+    assert cache.load(key, "code") == b"theirs"  # (the same bytes, once private: the check)
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="making a file of another user needs root")
+def test_an_entry_of_another_user_is_never_loaded(folder) -> None:
+    key = "ce" * 32
+    cache.store(key, "code", b"ours")
+    planted = _plant(folder, key, "code", b"theirs")
+    os.chown(planted, 65534, 65534)
+    planted.chmod(0o600)
+    assert cache.load(key, "code") is None
+
+
+def test_a_linked_entry_is_not_followed(folder, tmp_path) -> None:
+    key = "cf" * 32
+    cache.store(key, "code", b"ours")
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    target = _plant(outside, key, "code", b"theirs")
+    (folder / f"{key}.code").unlink()
+    (folder / f"{key}.code").symlink_to(target)
+    assert cache.load(key, "code") is None
+
+
+@pytest.mark.parametrize("swap", ["link", "folder"])
+def test_a_folder_swapped_after_its_check_is_not_read(folder, tmp_path, monkeypatch, swap) -> None:
+    """The rename race: the folder passes cache_dir's check, then is swapped (for a link to,
+    or for, a folder others may write to, holding a well-formed entry) before the read."""
+    key = "d0" * 32
+    cache.store(key, "code", b"ours")
+    hostile = tmp_path / "hostile"
+    hostile.mkdir()
+    _plant(hostile, key, "code", b"theirs").chmod(0o600)
+    hostile.chmod(0o777)
+    checked = cache.cache_dir
+
+    def check_then_swap():
+        path = checked()
+        path.rename(tmp_path / "moved")
+        if swap == "link":
+            path.symlink_to(hostile)
+        else:
+            hostile.rename(path)
+        return path
+
+    monkeypatch.setattr(cache, "cache_dir", check_then_swap)
+    assert cache.load(key, "code") is None

@@ -228,3 +228,15 @@ def test_singular_mass_matrix_every_method(method) -> None:
     run = model.for_run()
     run.check_determined(0.0, q0, att.rates(q0, w0))
     assert run.mass_singular
+
+
+def test_a_start_at_gimbal_lock_names_it() -> None:
+    """Exactly at pitch 90° the kinematic matrix and so M are singular: the start is refused
+    naming the singular attitude (it used to say a coordinate had no inertia)."""
+    s = pfaff.models.torque_free_body("euler")
+    model = s.equations().compile({"I1": 1, "I2": 2, "I3": 3})
+    with pytest.raises(pfaff.StateError, match=r"singular attitude: .*gimbal lock.*Quaternion"):
+        pfaff.simulate(model, [0.0, np.pi / 2, 0.0], [0.1, 0.2, 0.3], (0, 1))
+    # a degree away it runs, until the motion reaches the lock (the run's own stop)
+    tr = pfaff.simulate(model, [0.0, np.radians(89), 0.0], [0.0, 0.0, 0.0], (0, 1))
+    assert tr.status == "success" and np.allclose(tr.q, tr.q[0])  # at rest, stays there

@@ -301,3 +301,15 @@ def test_zoo_helpers():
         pfaff.models.bouncing_ball_state(-0.5)
     e = pfaff.models.bouncing_ball("k").contacts[0].restitution
     assert e == sp.Symbol("k")
+
+
+def test_max_steps_counts_over_the_segments(ball):
+    """The step limit spans the segments between impacts: 40 steps in all, past the first
+    impact at t₁ = √(2h/g)."""
+    q0, qd0 = pfaff.models.bouncing_ball_state(1.0)
+    traj = pfaff.simulate(ball, q0, qd0, (0.0, 5.0), max_steps=40, **TOL)
+    assert traj.status == "failed" and "max_steps = 40" in traj.message
+    t1 = np.sqrt(2 / G)
+    impacts = [r.t for r in traj.events if r.kind == "impact"]
+    assert len(impacts) >= 1 and impacts[0] == pytest.approx(t1, rel=1e-10)
+    assert traj.t[-1] < 5.0 and traj.stats["steps"] == 40

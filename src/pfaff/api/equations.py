@@ -5,6 +5,7 @@ from __future__ import annotations
 import sympy as sp
 
 from pfaff.core.errors import ModelError, OptionError
+from pfaff.core.keywords import checked_keywords
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
 from pfaff.derive.contacts import compile_contacts
@@ -61,6 +62,7 @@ class EquationsOfMotion(Derivation):
     Eq(g*m + m*Derivative(y(t), (t, 2)), 2*lambda1*y(t))
     """
 
+    @checked_keywords
     def compile(
         self,
         parameters: dict | None = None,
@@ -116,6 +118,7 @@ class EquationsOfMotion(Derivation):
             self, parameters or {}, solver=solver, evaluator=evaluator, contacts=compile_contacts
         )
 
+    @checked_keywords
     def linearize(
         self,
         op_point: dict,

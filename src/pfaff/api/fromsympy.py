@@ -35,9 +35,11 @@ from sympy.physics import mechanics as me
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError, ModelTypeError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.symbols import t
 
 
+@checked_keywords
 def from_sympy(obj: object, parameters: Mapping | Sequence | None = None) -> System:
     """Build a :class:`pfaff.System` equal to a SymPy mechanics model.
 

@@ -9,6 +9,7 @@ import numpy as np
 import sympy as sp
 
 from pfaff.core.errors import ModelError, ModelTypeError
+from pfaff.core.keywords import checked_keywords
 from pfaff.derive.linearize import linearize
 
 if TYPE_CHECKING:
@@ -55,6 +56,31 @@ def _point(op_point: dict | Callable, name: str, value: float, params: set[str])
     return out
 
 
+def _values(values: object, name: str) -> np.ndarray:
+    """The varied values: real numbers (not strings, booleans or complex), finite, at least one."""
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError):
+        raw = np.asarray([], dtype=object)
+    if raw.dtype.kind not in "iuf":
+        raise ModelTypeError(f"`vary['{name}']` must be real numbers; got {values!r:.60}")
+    out = raw.astype(float).ravel()
+    if not out.size or not np.all(np.isfinite(out)):
+        raise ModelError("`vary`: give at least one value, every one finite")
+    return out
+
+
+def _appears(op_point: object, name: str) -> bool:
+    """Whether a symbol named ``name`` appears in a value of the operating point."""
+    if not isinstance(op_point, dict):
+        return False
+    return any(
+        isinstance(v, sp.Basic) and any(s.name == name for s in v.free_symbols)
+        for v in op_point.values()
+    )
+
+
+@checked_keywords
 def root_locus(
     eom: Derivation,
     op_point: dict | Callable,
@@ -103,10 +129,14 @@ def root_locus(
     if not isinstance(key, str | sp.Symbol):
         raise ModelTypeError(f"`vary`: the parameter must be a name or Symbol; got {key!r:.60}")
     name = key if isinstance(key, str) else key.name
-    values = np.asarray(values, dtype=float).ravel()
-    if not values.size or not np.all(np.isfinite(values)):
-        raise ModelError("`vary`: give at least one value, every one finite")
+    values = _values(values, name)
     params = {p.name for p in eom.parameters}
+    if not callable(op_point) and name not in params and not _appears(op_point, name):
+        raise ModelError(
+            f"`vary`: `{name}` is not a parameter of the model (its parameters: "
+            f"{', '.join(sorted(params)) or 'none'}) nor a symbol of the operating point, so "
+            "varying it would change nothing"
+        )
     rows = []
     for value in values:
         point = _point(op_point, name, float(value), params)

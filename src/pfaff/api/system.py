@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pfaff.api.equations import EquationsOfMotion
+from pfaff.core.keywords import checked_keywords
 from pfaff.derive.reduce import reduce as _reduce
 from pfaff.derive.templates import derive
 from pfaff.derive.work import ForceWork
@@ -55,10 +56,12 @@ class System(SystemSpec):
         """
         return EquationsOfMotion.of(derive(self))
 
+    @checked_keywords
     def reduce(self, independent: object, *, solutions: dict | None = None) -> EquationsOfMotion:
         """Equations of motion in minimal coordinates (see :func:`pfaff.derive.reduce.reduce`)."""
         return EquationsOfMotion.of(_reduce(self, independent, solutions=solutions))
 
+    @checked_keywords
     def work(self, independent: object = None) -> list[ForceWork]:
         """Generalized force and virtual power of every applied force (see
         :func:`pfaff.derive.work.work`)."""

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 import warnings
 from typing import Any
@@ -11,6 +10,8 @@ from typing import Any
 import numpy as np
 
 from pfaff.cli.argtypes import positive, whole
+from pfaff.cli.jsontext import dumps
+from pfaff.cli.signals import stage, verbose
 from pfaff.core.errors import RedundancyWarning
 
 RUN_FLAGS = ("t_end", "method", "rtol", "atol")
@@ -53,6 +54,7 @@ def _load(args: argparse.Namespace) -> Any:
     from pfaff.modelfile import load_model
 
     kw = {} if args.max_bytes is None else {"max_bytes": args.max_bytes}
+    stage("loading")
     return load_model(args.model, **kw)
 
 
@@ -61,9 +63,11 @@ def run_equations(args: argparse.Namespace) -> int:
     from pfaff.modelfile.printer import file_syntax, matrix_syntax
 
     mf = _load(args)
+    stage("deriving")
     with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
         warnings.simplefilter("ignore", RedundancyWarning)
         eom = mf.system.equations()
+    stage("printing")
     coords = list(eom.coordinates)
     lagrange = [
         f"{file_syntax(e.lhs, coords)} = {file_syntax(e.rhs, coords)}"
@@ -99,7 +103,7 @@ def run_equations(args: argparse.Namespace) -> int:
         "redundant_sets": [list(x) for x in eom.redundant_sets],
     }
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     elif args.latex:
         print(eom.latex())
     else:
@@ -163,16 +167,30 @@ def run_model(args: argparse.Namespace) -> int:
     if t_end is None:
         raise OptionError(f"{args.model}: no end time: give --t-end or [simulate] t_end")
     samples = settings.pop("samples", None)
+    if samples:
+        from pfaff.core.memory import refuse_beyond
+        from pfaff.integrate.pace import state_bytes
+
+        refuse_beyond(
+            samples * state_bytes(mf.system.n, mf.system.n_constraints),
+            f"--samples {samples}",
+            "report fewer times",
+        )
     with warnings.catch_warnings():  # (the sets are reported below, not as a Python warning)
         warnings.simplefilter("ignore", RedundancyWarning)
+        stage("deriving and compiling")
         model = mf.compile()
         t_eval = np.linspace(0.0, t_end, samples) if samples else None
+        stage("simulating")
+        if verbose():
+            settings.setdefault("progress", True)
         start = time.perf_counter()
         traj = simulate(model, mf.q0, mf.qd0, (0.0, t_end), t_eval=t_eval, **settings)
         wall = time.perf_counter() - start
     rep = _run_report(mf, traj, wall)
     rep["redundant_rows"] = int(np.max(traj.redundant_rows, initial=0))
     rep["redundant_sets"] = _run_redundancy(model, traj)
+    stage("writing")
     if args.output:
         suffix = args.output.rsplit(".", 1)[-1].lower()
         (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
@@ -184,7 +202,7 @@ def run_model(args: argparse.Namespace) -> int:
         traj.animate(args.animate, frames=args.frames)
         rep["animate"] = args.animate
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(_run_text(rep))
     return 0 if traj.status == "success" else 3

@@ -13,14 +13,15 @@ unexpected (``--debug`` shows its traceback).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
 
 from pfaff.cli.argtypes import finite, positive, whole
+from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import guarded
+from pfaff.cli.signals import stage
 from pfaff.core.errors import OptionError
 
 # the simulation options imply --simulate when given; these are their defaults
@@ -142,7 +143,7 @@ def run_bicycle(args: argparse.Namespace) -> int:
     if not math.isfinite(args.speed):
         raise OptionError(f"--speed must be finite; got {args.speed}")
     rep = bicycle_report(args.speed, args.plot)
-    print(json.dumps(rep, indent=1) if args.json else format_bicycle(rep))
+    print(dumps(rep) if args.json else format_bicycle(rep))
     return 0
 
 
@@ -161,7 +162,7 @@ def run_body_demo(args: argparse.Namespace) -> int:
         rep["plot"] = args.plot
     _write_animation(traj, args, rep)
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(bodydemo.format_body(rep))
         for key in ("plot", "animate"):
@@ -258,6 +259,28 @@ def check_files(args: argparse.Namespace) -> None:
 
         _check_file("--animate", args.animate, ("gif", "mp4"), "animation")
         check_path(args.animate)
+    _distinct_files(args)
+
+
+def _distinct_files(args: argparse.Namespace) -> None:
+    """Refuse two outputs of one command that are one file (the second would overwrite the
+    first), and outputs that are devices or pipes (never replaced by a file)."""
+    from pfaff.core.files import special_kind
+
+    seen: dict[str, str] = {}
+    for flag in ("output", "plot", "animate"):
+        path = getattr(args, flag, None)
+        if not path:
+            continue
+        kind = special_kind(Path(path))
+        if kind is not None:
+            raise OptionError(f"--{flag} {path!r} is {kind}, not a regular file: give a file name")
+        real = os.path.realpath(path)
+        if real in seen:
+            raise OptionError(
+                f"--{seen[real]} and --{flag} are the same file {path!r}: give each its own name"
+            )
+        seen[real] = flag
 
 
 def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
@@ -301,7 +324,7 @@ def run_simulation(args: argparse.Namespace) -> int:
         )
     _write_outputs(traj, args, rep, simulation_units(args.demo, traj))
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(format_simulation(rep))
         for key in ("output", "plot", "animate"):
@@ -316,7 +339,7 @@ def run_ring(args: argparse.Namespace) -> int:
 
     if args.simulate:
         return run_simulation(args)
-
+    stage("deriving and solving")
     rep = ring_report(
         args.particles,
         force=args.force,
@@ -331,7 +354,7 @@ def run_ring(args: argparse.Namespace) -> int:
         rep["plot"] = args.plot
     rep.pop("_arrays")
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print(format_report(rep))
         if args.plot:
@@ -362,7 +385,7 @@ def run_pendulum(args: argparse.Namespace) -> int:
         "tension_exact": args.mass * args.gravity * math.cos(a),
     }
     if args.json:
-        print(json.dumps(rep, indent=1))
+        print(dumps(rep))
     else:
         print("Cartesian pendulum, q = (x, y):")
         for e in rep["equations"]:

@@ -1,7 +1,8 @@
 """How every ``pfaff`` command ends on an error: one line on stderr and an exit code.
 
 0 success, 1 an unexpected error (``--debug`` shows the traceback), 2 a usage, model, value or file
-error, 130 interrupted (Ctrl-C); a command returns 3 itself for a simulation that failed.
+error, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM); a command returns 3 itself for a
+simulation that failed or was interrupted (:mod:`pfaff.cli.signals`).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import sys
 import traceback
 from collections.abc import Callable
 
+from pfaff.cli.signals import interrupted, interrupts
 from pfaff.core.errors import PfaffError, raised_in_generated_code
 
 
@@ -49,9 +51,10 @@ def unexpected(e: BaseException) -> str:
 def guarded(action: Callable[[], int], debug: bool) -> int:
     """``action()``'s exit code, or the exit code of the error it raised (see the module)."""
     try:
-        return action()
-    except KeyboardInterrupt:
-        return fail("interrupted", 130, debug)
+        with interrupts():
+            return action()
+    except KeyboardInterrupt as e:  # Ctrl-C or SIGTERM, at any stage (pfaff.cli.signals)
+        return fail(*interrupted(e), debug)
     except (PfaffError, OSError) as e:
         return fail(f"error: {one_line(str(e))}", 2, debug)
     except (ValueError, ArithmeticError) as e:

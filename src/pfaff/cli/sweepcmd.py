@@ -9,7 +9,6 @@ usage, model or file error, 1 for anything unexpected, 130 for Ctrl-C; the messa
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from collections.abc import Sequence
@@ -19,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from pfaff.cli.argtypes import positive, whole
+from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import guarded, one_line
 from pfaff.core.errors import OptionError
 
@@ -104,7 +104,10 @@ def _sweep(args: argparse.Namespace) -> int:
         "seconds": round(seconds, 3),
         "output": args.output,
     }
-    print(json.dumps(rep) if args.json else _text(rep))
+    print(dumps(rep, indent=None) if args.json else _text(rep))
+    if ds.attrs.get("status") == "interrupted":  # the runs done are written and reported
+        print("pfaff: interrupted: the runs done are kept, the others marked", file=sys.stderr)
+        return 3
     return 0
 
 

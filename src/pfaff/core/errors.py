@@ -12,6 +12,8 @@ import types
 __all__ = [
     "ConstraintError",
     "InertiaError",
+    "KeywordError",
+    "LongRunWarning",
     "ModelError",
     "ModelTypeError",
     "OptionError",
@@ -69,10 +71,20 @@ class OptionError(PfaffError):
     """
 
 
+class KeywordError(OptionError, TypeError):
+    """A public function or method was called with a keyword it does not have (named, with the
+    closest valid one and the full list). Also a ``TypeError``, as Python's own would be."""
+
+
 class RedundancyWarning(UserWarning):
     """Some constraints depend on one another: the motion is still determined, but on those rows
     only Aᵀλ is; pfaff reports the minimum-norm multipliers (``model.redundancy`` names the
     indeterminate directions)."""
+
+
+class LongRunWarning(UserWarning):
+    """A run without ``t_eval`` whose recorded states, at its measured pace, would need more memory
+    than is reasonable (the estimate is in the message): pass ``t_eval`` to bound it."""
 
 
 class SimulationError(PfaffError, RuntimeError):

@@ -1,6 +1,8 @@
 """Atomic file output: write to a temporary file beside the target, then rename over it.
 
 A failure half-way leaves the user's existing file untouched and no partial file behind. A target
+that exists but is not a regular file (a device node such as /dev/null, a named pipe, a socket,
+directly or through a link) is refused, never replaced. A target
 that is a symbolic link is written through: the link's final target is replaced (in its own
 folder, so the rename stays atomic) and the link is kept. An existing file keeps its permissions.
 """
@@ -9,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -35,6 +38,9 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         raise FileNotFoundError(f"cannot write `{path}`: folder `{folder}` does not exist")
     if target.is_dir():
         raise IsADirectoryError(f"cannot write `{path}`: it is a folder")
+    kind = special_kind(target)
+    if kind is not None:  # a rename would replace the device or pipe with a regular file
+        raise FileExistsError(f"cannot write `{path}`: it is {kind}, not a regular file")
     mode = target.stat().st_mode & 0o7777 if target.exists() else None
     fd, tmp = tempfile.mkstemp(
         prefix=f".{target.name}.", suffix=suffix or target.suffix, dir=folder
@@ -52,3 +58,20 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def special_kind(target: Path) -> str | None:
+    """What an existing target that is not a regular file is (a device, a pipe...), else None."""
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        return None
+    for test, kind in (
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a named pipe"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return kind
+    return None

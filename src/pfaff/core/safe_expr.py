@@ -50,6 +50,7 @@ from sympy.core.function import AppliedUndef
 from sympy.physics.vector import dynamicsymbols
 
 from pfaff.core.errors import ModelError
+from pfaff.core.expansion import EXPANDING, MAX_FUNCTION_TERMS, expanded_terms
 
 __all__ = [
     "CONSTANTS",
@@ -246,7 +247,14 @@ def parse_expression(
         raise ExpressionError(f"{where}: the expression is empty")
     root = _parse(text, body, lead, where)
     builder = _Builder(text, body, lead, where, names, table, subscripts, allow_dot, max_depth)
-    return builder.build(root)
+    expr = builder.build(root)
+    for number in expr.atoms(sp.Number):  # the model computes in floats: 10**400 overflows
+        if number.is_finite and not math.isfinite(float(number)):
+            raise ExpressionError(
+                f"{where}: the constant {_shortrepr.repr(str(number))} is beyond the "
+                "floating-point range (about 1.8e308) the equations are computed in"
+            )
+    return expr
 
 
 def parse_number(value: object, where: str) -> float:
@@ -394,8 +402,17 @@ def _scan(text: object, where: str, max_length: int, max_depth: int) -> None:
             )
 
 
+_LONG_DIGITS = re.compile(rf"(?<![0-9.eE_])[0-9]{{{MAX_INT_DIGITS + 1},}}(?![0-9.eEjJ_])")  # ints
+
+
 def _parse(text: str, body: str, lead: int, where: str) -> ast.expr:
     """``ast.parse`` of the stripped text, its failures as :class:`ExpressionError`."""
+    digits = _LONG_DIGITS.search(body)  # Python refuses > 4300 digits in words of its own
+    if digits is not None:
+        raise ExpressionError(
+            f"{where}: an integer has more than {MAX_INT_DIGITS} digits "
+            f"({_location(text, lead, 1, digits.start())})"
+        )
     try:
         with warnings.catch_warnings():  # SyntaxWarning, DeprecationWarning of odd literals
             warnings.simplefilter("ignore")
@@ -818,6 +835,15 @@ class _Builder:
         assert isinstance(entry, tuple)
         func, arity = entry
         args, depth = self.pop(values, arity) if arity else ([], 0)
+        for a in args if func in EXPANDING else ():
+            if (size := expanded_terms(a)) > MAX_FUNCTION_TERMS:
+                shown = f"{size}" if size < 1 << 40 else "more than 2**40"
+                raise self.error(
+                    node,
+                    f"the argument of {self.segment(node)} would expand to {shown} terms "
+                    f"(at most {MAX_FUNCTION_TERMS}): SymPy expands it to decide its sign or "
+                    "reality, which can take minutes; write a shorter argument",
+                )
         if func is sp.sqrt:
             self.check_power(node, args[0], sp.S.Half)
         elif func is sp.exp:

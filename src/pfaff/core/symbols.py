@@ -8,6 +8,7 @@ handed to pfaff unchanged.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from functools import cache
 
 import sympy as sp
@@ -160,3 +161,35 @@ def speed(q: sp.Function) -> sp.Derivative:
 def accel(q: sp.Function) -> sp.Derivative:
     """q̈ as ``Derivative(q, (t, 2))``."""
     return sp.Derivative(q, (t, 2))
+
+
+def name_clash(symbols: Iterable[sp.Symbol]) -> str | None:
+    """The problem when two different symbols share a name (other assumptions), else None.
+
+    A model's parameters are given values by name or by Symbol: with ``Symbol("m",
+    positive=True)`` and ``Symbol("m")`` in one model, the name ``"m"`` does not say which.
+
+    Examples
+    --------
+    >>> name_clash([sp.Symbol("m", positive=True), sp.Symbol("g"), sp.Symbol("m")])
+    'two different symbols are both named `m` (assumptions positive=True and none)'
+    """
+    seen: dict[str, sp.Symbol] = {}
+    for s in symbols:
+        other = seen.setdefault(s.name, s)
+        if other != s:
+            first, second = sorted((_given(other), _given(s)), key=lambda a: a == "none")
+            return (
+                f"two different symbols are both named `{s.name}` (assumptions {first} and "
+                f"{second})"
+            )
+    return None
+
+
+def _given(s: sp.Symbol) -> str:
+    """The assumptions a symbol was created with, as ``key=value`` (``none`` without any)."""
+    given = getattr(s, "_assumptions_orig", None)
+    if given is None:  # older SymPy: the given ones are assumptions0
+        given = s.assumptions0
+    given = {k: v for k, v in given.items() if k != "commutative" or v is not True}
+    return ", ".join(f"{k}={v}" for k, v in sorted(given.items())) or "none"

@@ -11,6 +11,10 @@ Loading cached code runs it, so the cache trusts nothing it cannot check:
 - the folder is ``$XDG_CACHE_HOME/pfaff`` (``~/.cache/pfaff`` when unset), made private (0700)
   to the user; a folder owned by another user, or one others may write to and that cannot be
   made private, is not used;
+- an entry is read only through descriptors checked after opening (``O_NOFOLLOW``, ``fstat``):
+  the folder actually opened is ours and writable by no one else, and so is the entry (one
+  planted by another user while the folder was open to them is theirs, and ignored); a swap of
+  the folder between a check and the read cannot make pfaff read another;
 - every entry starts with the SHA-256 of the rest of the file and names its key; an entry whose
   hash or key does not match is ignored (and replaced by the next writer);
 - entries are written to a temporary file in the folder and renamed into place, so a
@@ -113,13 +117,22 @@ def _entry(folder: Path, key: str, kind: str) -> Path:
 
 
 def load(key: str, kind: str) -> bytes | None:
-    """The payload stored under (key, kind), or None when absent, off, or failing its check."""
+    """The payload stored under (key, kind), or None when absent, off, or failing its check.
+
+    The checks are made on what is read, never on a path that could change in between: the
+    folder is opened (not following a link) and checked through its descriptor (a folder of
+    ours that no one else may write to), the entry is opened relative to that descriptor (not
+    following a link) and checked through its own (a regular file of ours that no one else
+    may write to), and only then read; a rename or a planted entry fails one of them.
+    """
     folder = cache_dir()
     if folder is None:
         return None
     try:
-        data = _entry(folder, key, kind).read_bytes()
+        data = _read_private(folder, f"{key}.{kind}")
     except OSError:
+        return None
+    if data is None:
         return None
     head, sep, payload = data.partition(b"\n")
     if not sep:
@@ -128,6 +141,27 @@ def load(key: str, kind: str) -> bytes | None:
     if named != f"{key}.{kind}" or hashlib.sha256(payload).hexdigest() != digest:
         return None
     return payload
+
+
+def _private(st: os.stat_result, kind: int) -> bool:
+    """Whether a status is of that kind, ours, and writable by no one else."""
+    return stat.S_IFMT(st.st_mode) == kind and st.st_uid == os.getuid() and not st.st_mode & 0o022
+
+
+def _read_private(folder: Path, name: str) -> bytes | None:
+    """The bytes of ``folder/name`` if both are private (checked on the descriptors read)."""
+    nofollow = getattr(os, "O_NOFOLLOW", 0)
+    dfd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | nofollow)
+    try:
+        if not _private(os.fstat(dfd), stat.S_IFDIR):
+            return None
+        fd = os.open(name, os.O_RDONLY | nofollow, dir_fd=dfd)
+        with os.fdopen(fd, "rb") as fh:
+            if not _private(os.fstat(fh.fileno()), stat.S_IFREG):
+                return None
+            return fh.read()
+    finally:
+        os.close(dfd)
 
 
 def store(key: str, kind: str, payload: bytes) -> None:

@@ -20,7 +20,7 @@ import numpy as np
 import sympy as sp
 
 from pfaff.core.errors import ParameterError
-from pfaff.core.symbols import local_qd
+from pfaff.core.symbols import local_qd, name_clash
 from pfaff.derive.blocks import Block, raw_keys
 from pfaff.derive.codegen import constraint_layout, energy_exprs, power_exprs, stream_code
 from pfaff.derive.events import compile_events
@@ -47,6 +47,10 @@ def parameter_values(params: tuple[sp.Symbol, ...], given: dict) -> list[float]:
     values: dict[sp.Symbol, object] = {}
     problems = []
     for key, val in given.items():
+        if isinstance(key, str) and (clash := name_clash(p for p in params if p.name == key)):
+            problems.append(f"{clash}: give each its value by Symbol, or use one symbol")
+            values.update(dict.fromkeys((p for p in params if p.name == key), val))
+            continue
         sym = by_name.get(key) if isinstance(key, str) else key
         if sym not in params and isinstance(key, sp.Symbol):
             sym = by_name.get(key.name)  # the same name with other assumptions: the same parameter

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from pfaff.core.errors import ModelError
+from pfaff.core.memory import available_bytes
 from pfaff.derive.blocks import raw_keys
 
 if TYPE_CHECKING:
@@ -14,21 +14,6 @@ if TYPE_CHECKING:
 
 BYTES_PER_ROW = 8 * 14  # float64 work arrays per coordinate or constraint row in one solve
 ROWS_FOR_CHECK = 1 << 16  # below this, never bother
-
-
-def available_bytes() -> int:
-    """Memory available to this process: MemAvailable from /proc/meminfo, else physical memory."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return 1 << 62
 
 
 def estimate_bytes(n: int, m: int, blocks: Sequence[Block]) -> int:

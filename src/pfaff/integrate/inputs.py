@@ -102,7 +102,8 @@ class DrivenModel:
             if kind == 0:
                 p[i] = u  # type: ignore[assignment]
                 continue
-            v = u(t) if kind == 1 else u(t, q, qd)  # type: ignore[operator]
+            # a law gets copies: one that changes its arguments in place leaves the run's state
+            v = u(t) if kind == 1 else u(t, q.copy(), qd.copy())  # type: ignore[operator]
             # the common case, a finite float (np.float64 too), without the full check
             p[i] = v if v.__class__ in _FLOATS and isfinite(v) else _value(v, name, t)
 

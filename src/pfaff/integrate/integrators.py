@@ -26,6 +26,7 @@ from pfaff.numeric.projection import Projector
 from pfaff.numeric.protocol import DynamicsModel, OdeFunction
 
 RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
+UNREACHED = 1e6  # a projected state this many times constraint_tol off the constraints: failed
 
 
 class _RKStepper(Stepper):
@@ -147,6 +148,14 @@ class ProjectedRK(_RKStepper):
         q, qd = self.state()
         q, qd, changed = self.projector(t, q, qd)
         if changed:
+            reached = self.projector.residual(t, q, qd)
+            if reached > UNREACHED * self.projector.tol:
+                self.fail(
+                    f"the constraints cannot be satisfied at t = {t:.17g}: after projection "
+                    f"max(|f|, |A q̇ + b|) = {reached:.3g} (constraint_tol "
+                    f"{self.projector.tol:.3g}); they may have become inconsistent (a rheonomic "
+                    "constraint driving the system where no configuration satisfies them all)"
+                )
             s = self.solver
             self._y_raw = s.y  # the step's interpolant ends here (see dense)
             s.y = np.concatenate([q, qd])

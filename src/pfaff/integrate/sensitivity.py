@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from pfaff.core.errors import ModelError, OptionError
+from pfaff.core.keywords import checked_keywords
 from pfaff.derive.variational import VariationalKernel, variational_kernel
 from pfaff.integrate.initial import _indices, consistent_state
 from pfaff.integrate.sensstep import (
@@ -144,6 +145,7 @@ def _state_x(field: AugmentedField, t: float, q: np.ndarray, qd: np.ndarray) -> 
     return x
 
 
+@checked_keywords
 def sensitivities(
     model: Any,
     q0: object,

@@ -27,11 +27,13 @@ from pfaff.core.errors import (
     undefined_at,
 )
 from pfaff.core.events import Event, EventRecord
+from pfaff.core.keywords import checked_keywords
 from pfaff.integrate.contact import ContactRun, Layout, run_segments
 from pfaff.integrate.events import SINGULAR, AttitudeEvents, UserEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
+from pfaff.integrate.pace import Pace, state_bytes
 from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
 from pfaff.numeric.checks import check_model, check_state
 from pfaff.numeric.projection import Projector
@@ -88,8 +90,6 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
     return te
 
 
-STALL_WINDOW = 2000  # steps over which the pace of a run is measured
-STALL_STEPS = 1e7  # a pace that needs more steps than this to finish is a stall
 MAX_STEPS = 1e9  # a max_step that forces more steps than this is refused (it would not end)
 
 
@@ -142,6 +142,11 @@ def _options(kw: dict, span: tuple[float, float]) -> dict:
                 f"got {v:g}"
             )
         kw["first_step"] = v
+    v = kw["max_steps"]
+    if v is not None and (isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 1):
+        raise OptionError(
+            f"`max_steps` must be a positive integer or None (no limit); got {v!r:.80}"
+        )
     if not isinstance(kw["integrator"], str) or kw["integrator"] not in RK_METHODS:
         raise OptionError(
             f"`integrator` must be one of {', '.join(RK_METHODS)}; got {kw['integrator']!r:.80}"
@@ -175,6 +180,9 @@ def initial_state(
     t0, q, qd = check_state(t0, q0, qd0, model.n, names, ("t0", "q0", "qd0"))
     if model.m:
         q, qd = _onto_constraints(model, t0, q, qd, projector, opts)
+    lock = AttitudeEvents(model.attitudes).singular(q)
+    if lock is not None:  # (M is singular there too: name the cause, not the symptom)
+        raise StateError(f"the initial state is at a singular attitude: {lock}")
     model.check_determined(t0, q, qd)
     return q, qd
 
@@ -209,6 +217,7 @@ def _onto_constraints(
     return q, qd
 
 
+@checked_keywords
 def simulate(
     model: DynamicsModel,
     q0: Sequence[float] | np.ndarray,
@@ -234,6 +243,7 @@ def simulate(
     inputs: dict | None = None,
     events: Sequence[Event] = (),
     rest_speed: float = 1e-6,
+    max_steps: int | None = None,
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -291,6 +301,12 @@ def simulate(
         With unilateral constraints (``System.add_unilateral_constraint``): a contact closing
         at this speed or slower (gap units per second) closes without a bounce (an event of
         kind "rest"; see :mod:`pfaff.integrate.contact`).
+    max_steps : int, optional
+        Fail after this many steps (default: no limit). Whatever the span, a run fails on its
+        own only when its steps collapse against its own history (chattering, e.g. Coulomb
+        friction about q̇ = 0) or stop advancing t (:mod:`pfaff.integrate.pace`); without
+        ``t_eval`` every step is recorded, and a run whose states would need more than 1 GiB
+        (or half the available memory) warns (:class:`pfaff.LongRunWarning`).
 
     Returns
     -------
@@ -329,7 +345,7 @@ def simulate(
         return _simulate(
             model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
             integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
-            project_output, progress, throw, inputs, events, rest_speed,
+            project_output, progress, throw, inputs, events, rest_speed, max_steps,
         )  # fmt: skip
 
 
@@ -348,7 +364,7 @@ def _events(model: DynamicsModel, events: object) -> UserEvents:
 def _simulate(
     model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
     integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
-    project_output, progress, throw, inputs, events, rest_speed=1e-6,
+    project_output, progress, throw, inputs, events, rest_speed=1e-6, max_steps=None,
 ):  # fmt: skip
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
@@ -376,6 +392,7 @@ def _simulate(
             project_output=project_output,
             progress=progress,
             throw=throw,
+            max_steps=max_steps,
         ),
         (t0, t1),
     )
@@ -392,10 +409,11 @@ def _simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = not cls.reports_drift
+    pace = Pace(t1, max_steps, state_bytes(model.n, model.m) if te is None else None)
     if contacts:
         run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
         found = _run_contacts(run, cls, options, te, t0, t1, q0a, qd0a, progress, user,
-                              project_output)  # fmt: skip
+                              project_output, pace)  # fmt: skip
         status, message, segs, stats, projectors = found
         if status != "success" and throw:
             raise SimulationError(message)
@@ -408,6 +426,7 @@ def _simulate(
         )
     power = model.power_function() if model.applied_power else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
+    run.pace = pace
     run.events = AttitudeEvents(model.attitudes)
     run.user = user
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
@@ -418,9 +437,11 @@ def _simulate(
     return _trajectory(model, cls.name, run, status, message, stats, projector, project_output)
 
 
-def _run_contacts(contacts, cls, options, te, t0, t1, q0, qd0, progress, user, project_output):
+def _run_contacts(
+    contacts, cls, options, te, t0, t1, q0, qd0, progress, user, project_output, pace
+):  # fmt: skip
     """A run with unilateral constraints: one :class:`_Run` per segment between contact
-    events (:func:`pfaff.integrate.contact.run_segments`)."""
+    events (:func:`pfaff.integrate.contact.run_segments`); one :class:`Pace` counts their steps."""
 
     def segment(model, t, q, qd, events):
         projector = Projector(model, tol=contacts.tol)
@@ -428,7 +449,8 @@ def _run_contacts(contacts, cls, options, te, t0, t1, q0, qd0, progress, user, p
         tes = te if te is None or t == t0 else te[te > t]
         power = model.power_function() if model.applied_power else None
         run = _Run(stepper, projector if project_output else None, tes, t, t1, progress, power)
-        run.events, run.user = AttitudeEvents(model.attitudes), events
+        run.events, run.user, run.pace = AttitudeEvents(model.attitudes), events, pace
+        pace.restart()  # each segment its own history; max_steps over them all
         run.restart = lambda t_, q_, qd_: cls(model, t_, q_, qd_, t1, options, projector)
         status, message = run.go(q, qd)
         return run, status, message, projector
@@ -459,23 +481,7 @@ class _Run:
         self.records: list[EventRecord] = []  # the events found, in time order
         self._done: list[dict] = []  # the statistics of steppers replaced after a switch
         self._last_q: np.ndarray | None = None  # the state of the last event check
-        self._count, self._window_t = 0, t0  # steps and start of the stall window (_stall)
-
-    def _stall(self, after: float) -> None:
-        """Fail a run whose steps stop advancing time (chattering at a discontinuity such as
-        Coulomb friction's sign(q̇), or a stiff system) instead of running for hours: over each
-        window of ``STALL_WINDOW`` steps, the pace must let the run end within ``STALL_STEPS``
-        more steps."""
-        pace = (after - self._window_t) / self._count
-        self._count, self._window_t = 0, after
-        if pace <= 0 or (self.t1 - after) / pace > STALL_STEPS:
-            raise _RunFailure(
-                f"the integration stalled at t = {after:.17g}: the last {STALL_WINDOW} steps "
-                f"averaged {pace:.3g}, which would take more than {STALL_STEPS:.0e} steps to "
-                "reach the end. The equations may be discontinuous there (sign() or abs() of a "
-                "velocity: Coulomb friction chattering about q̇ = 0; smooth it, e.g. "
-                "tanh(q̇/ε)) or stiff (try method='ida')"
-            )
+        self.pace = Pace(t1, None, None)  # the stall test and the step limit (set by simulate)
 
     def finish(self) -> dict:
         """The steppers' statistics, summed over restarts."""
@@ -570,12 +576,11 @@ class _Run:
             if user:
                 user.start(self.t0, q0, qd0)
             while st.t < self.t1:
+                self.pace.limit()
                 t_prev = st.t
                 try:
                     st.step()
-                    self._count += 1
-                    if self._count >= STALL_WINDOW:
-                        self._stall(st.t)
+                    self.pace.step(t_prev, st.t)
                     roots, stop = user.find(st, t_prev) if user else ([], False)
                     if te is None:
                         step_work = self._work()

@@ -12,6 +12,7 @@ import sympy as sp
 from sympy.physics.vector import ReferenceFrame
 
 from pfaff.core.errors import ModelError, ModelTypeError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.symbols import as_expr, t
 from pfaff.mechanics.attitude import Attitude, PlanarAngle, Rotation
 from pfaff.mechanics.bodies import Body, between, check_rotation, inertia_matrix, torque_exprs
@@ -26,6 +27,7 @@ class ElementsMixin:
     bodies: list[Body]
     inputs: list[sp.Symbol]
 
+    @checked_keywords
     def add_rigid_body(
         self: SystemSpec,
         mass: object,
@@ -155,6 +157,7 @@ class ElementsMixin:
                     "ReferenceFrame attitudes may share coordinates)"
                 )
 
+    @checked_keywords
     def add_torque(
         self: SystemSpec,
         torque: object,
@@ -187,9 +190,10 @@ class ElementsMixin:
             raise ModelTypeError("`on` must be a Body of this system (from add_rigid_body)")
         label = self._label(name, "torque")
         exprs = torque_exprs(on, torque, frame, f"torque `{label}`")
-        coords = self._scan(exprs, f"torque `{label}`", speeds=True)
+        coords = self._scan(exprs, f"torque `{label}`", speeds=True, smooth=False)
         self._add("torque", exprs, coords, label, 3)
 
+    @checked_keywords
     def add_spring(
         self: SystemSpec,
         k: object,
@@ -217,6 +221,7 @@ class ElementsMixin:
         stretch = d.dot(d) if rest == 0 else (sp.sqrt(d.dot(d)) - rest) ** 2
         self.add_potential_energy(stiff * stretch / 2, name=label)
 
+    @checked_keywords
     def add_damper(self: SystemSpec, c: object, between: tuple, *, name: str | None = None) -> None:
         """Add a linear damper along the line of two points: R = ½ c ℓ̇², ℓ̇ = (d·ḋ)/|d|.
 
@@ -236,6 +241,7 @@ class ElementsMixin:
         damping = as_expr(c, f"damping of damper `{label}`")
         self.add_dissipation(damping * rate**2 / (2 * d.dot(d)), name=label)
 
+    @checked_keywords
     def add_input(self: SystemSpec, symbol: object) -> sp.Symbol:
         """Declare a parameter as an input: ``compile()`` does not ask for its value (0 until
         set), ``pfaff.simulate(model, ..., inputs={name: u})`` supplies it during a run (a number,
@@ -257,6 +263,7 @@ class ElementsMixin:
         self.inputs.append(sym)
         return sym
 
+    @checked_keywords
     def add_dissipation(self: SystemSpec, R: object, *, name: str | None = None) -> None:
         """Add a Rayleigh dissipation function R(q, q̇, t): Q_j = −∂R/∂q̇_j.
 

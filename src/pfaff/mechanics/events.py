@@ -14,6 +14,7 @@ import sympy as sp
 
 from pfaff.core.errors import ModelError, PfaffError
 from pfaff.core.events import event_direction, event_terminal
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.symbols import as_expr
 
 if TYPE_CHECKING:
@@ -37,6 +38,7 @@ class EventsMixin:
 
     events: list[EventSpec]
 
+    @checked_keywords
     def add_event(
         self: SystemSpec,
         condition: object,
@@ -86,7 +88,7 @@ class EventsMixin:
         e = as_expr(condition, what)
         known = set(self._parameters)
         try:
-            coords = self._scan((e,), what, speeds=True)
+            coords = self._scan((e,), what, speeds=True, smooth=False)
         finally:
             unknown = sorted(s.name for s in self._parameters - known)
             self._parameters = known

@@ -17,6 +17,7 @@ from sympy.core.function import AppliedUndef
 from sympy.physics.vector import Vector
 
 from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.lazy import LazySeq, NumberedNames, concat
 from pfaff.core.symbols import (
     as_expr,
@@ -31,6 +32,7 @@ from pfaff.mechanics.contacts import ContactsMixin, ContactSpec
 from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
+from pfaff.mechanics.smooth import kinks
 
 PIECE_KINDS = (
     "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
@@ -162,6 +164,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         """Number of generalized coordinates."""
         return len(self._ordinary) + sum(f.n for f in self.families)
 
+    @checked_keywords
     def add_family(self, name: str, n: int, *, first: int = 0) -> Family:
         """Append an indexed family of n coordinates ``name{first}`` … ``name{first+n-1}``.
 
@@ -287,13 +290,15 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         *,
         speeds: bool,
         refs: dict | None = None,
+        smooth: bool = True,
     ) -> tuple[int, ...]:
-        """Indices of the coordinates the expressions involve; reject foreign functions of time.
+        """Indices of the coordinates the expressions involve; reject foreign functions of time
+        (and, for ``smooth`` terms, those the derivation differentiates, kinks of the state).
 
         Family references (``theta[k]``) are collected into ``refs`` (function -> Ref) when given.
         """
         used: set[int] = set()
-        problems: list[str] = []
+        problems: list[str] = kinks(exprs) if smooth else []
         for e in exprs:
             atoms = e.atoms(sp.Derivative, AppliedUndef, sp.Symbol)
             derivs = [a for a in atoms if isinstance(a, sp.Derivative)]
@@ -447,6 +452,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         return name or f"{kind}{self._counts.get(kind, self.n_constraints) + 1}"
 
     # ------------------------------------------------------------------ building the model
+    @checked_keywords
     def add_particle(
         self,
         mass: object,
@@ -492,6 +498,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         coords = self._scan(r, f"position of particle `{label}`", speeds=False, refs=refs)
         self._add("particle", (m, *r), coords, label, len(r), over)
 
+    @checked_keywords
     def add_kinetic_energy(
         self, expr: object, *, name: str | None = None, over: object = None
     ) -> None:
@@ -513,6 +520,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
             raise ModelError(f"kinetic energy `{label}` involves no coordinate: {e}")
         self._add("kinetic", (e,), coords, label, over=over)
 
+    @checked_keywords
     def add_potential_energy(
         self, expr: object, *, name: str | None = None, over: object = None
     ) -> None:
@@ -533,6 +541,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         if coords or refs:
             self._add("potential", (e,), coords, label, over=over)
 
+    @checked_keywords
     def add_force(
         self,
         force: object,
@@ -567,11 +576,12 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         if len(f) != len(r):
             raise ModelError(f"force `{label}` has {len(f)} components but its point has {len(r)}")
         refs = self._refs(over)
-        cf = self._scan(f, f"force `{label}`", speeds=True, refs=refs)
+        cf = self._scan(f, f"force `{label}`", speeds=True, refs=refs, smooth=False)
         cr = self._scan(r, f"point of force `{label}`", speeds=False, refs=refs)
         coords = tuple(sorted(set(cf) | set(cr)))
         self._add("force", (*f, *r), coords, label, len(f), over)
 
+    @checked_keywords
     def add_generalized_force(
         self, coordinate: object, expr: object, *, name: str | None = None
     ) -> None:
@@ -592,10 +602,14 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         e = as_expr(expr, f"generalized force `{label}`")
         j = self._index[coordinate]
         coords = tuple(
-            sorted(set(self._scan((e,), f"generalized force `{label}`", speeds=True)) | {j})
+            sorted(
+                set(self._scan((e,), f"generalized force `{label}`", speeds=True, smooth=False))
+                | {j}
+            )
         )
         self._add("genforce", (e,), coords, label, coords.index(j))
 
+    @checked_keywords
     def add_holonomic_constraint(
         self, expr: object, name: str | None = None, *, over: object = None
     ) -> None:
@@ -620,6 +634,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         self._check_new_constraint(e, local, coords, label, tmpl)
         self._add("holonomic", (e,), coords, label, local=local, template=tmpl)
 
+    @checked_keywords
     def add_velocity_constraint(
         self, expr: object, name: str | None = None, *, over: object = None
     ) -> None:

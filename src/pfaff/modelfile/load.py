@@ -61,6 +61,7 @@ import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.safe_expr import (
     ExpressionError,
     check_name,
@@ -124,6 +125,7 @@ class ModelFile:
         return self.system.equations().compile({k: v for k, v in values.items() if k in used})
 
 
+@checked_keywords
 def load_model(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> ModelFile:
     """Read a model file (TOML) into a :class:`ModelFile`; nothing in the file is executed.
 
@@ -183,10 +185,15 @@ def _read(p: Path, max_bytes: int) -> dict:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise ModelFileError(f"{where}: not UTF-8 text (byte {e.start})") from None
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark (some editors write one)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ModelFileError(f"{where}: not valid TOML: {e}") from None
+    except ValueError as e:  # Python's own limit on the digits of an integer
+        raise ModelFileError(
+            f"{where}: a number has more digits than Python reads ({str(e).split(';')[0]})"
+        ) from None
     except RecursionError:
         raise ModelFileError(f"{where}: nested too deeply") from None
 

@@ -40,6 +40,7 @@ import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError
+from pfaff.core.keywords import checked_keywords
 from pfaff.core.symbols import coordinates as make_coordinates
 from pfaff.core.symbols import t
 from pfaff.mechanics.attitude import Rotation
@@ -89,6 +90,7 @@ class _Robot:
     order: list[str] = field(default_factory=list)  # joints, parents before children
 
 
+@checked_keywords
 def load_urdf(path: str | os.PathLike, fixed_base: bool = True) -> System:
     """Read a URDF file into a :class:`pfaff.System`.
 

@@ -26,6 +26,8 @@ from typing import Any
 import numpy as np
 
 from pfaff.core.errors import OptionError, PfaffError
+from pfaff.core.keywords import checked_keywords
+from pfaff.core.memory import refuse_beyond
 from pfaff.modelfile import ModelFile, load_model
 from pfaff.sweep.grid import make_grid
 from pfaff.sweep.result import Results
@@ -39,6 +41,7 @@ SYNC = ("synchronous", "sync")
 PASSED = ("t_end", "samples")  # [simulate] keys the sweep uses itself, not pfaff.simulate
 
 
+@checked_keywords
 def sweep(
     model: str | os.PathLike | ModelFile,
     vary: Mapping[str, Sequence[float] | np.ndarray],
@@ -87,7 +90,9 @@ def sweep(
         multiplier), NaN past the end of a failed run, and per run ``status`` ("success",
         "failed", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
         ``constraint_residual`` (max |f|, |A q̇ + b|) and ``seconds``. Attributes: the model,
-        ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``.
+        ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``,
+        and ``status``: "complete", or "interrupted" after Ctrl-C or SIGTERM (the cluster shut
+        down, the runs done kept, the others with status "interrupted" and NaN states).
 
     Raises
     ------
@@ -137,6 +142,11 @@ def sweep(
     grid = make_grid(vary, list(mf.parameters), coordinates)
     t_end = _end_time(mf, t_end)
     samples = _samples(mf, samples)
+    refuse_beyond(  # the results: q and q̇ of every run at every reported time
+        16.0 * grid.size * samples * max(len(coordinates), 1),
+        f"a sweep of {grid.size} runs of {samples} samples",
+        "vary fewer values, or report fewer samples",
+    )
     options = {k: v for k, v in mf.simulate.items() if k not in PASSED}
     spec = SweepSpec(
         text=text,
@@ -247,13 +257,25 @@ def _execute(
     """Run every grid point into ``results``; how it ran (for the dataset's attributes)."""
     from tqdm.auto import tqdm
 
-    with tqdm(total=spec.grid.size, disable=not show, unit="run", desc="sweep") as bar:
-        if isinstance(scheduler, str) and scheduler in SYNC:
-            for batch in _chunks(range(spec.grid.size), max(1, spec.grid.size // 100)):
-                bar.update(results.add(run_batch(spec, batch)))
-            return {"scheduler": "synchronous", "workers": 1, "batch": 0}
-        with _ClientContext(scheduler, workers, spec.grid.size) as client:
-            return _distributed(client, spec, results, bar)
+    sync = isinstance(scheduler, str) and scheduler in SYNC
+    info = {
+        "scheduler": "synchronous" if sync else str(scheduler or "local"),
+        "workers": 1,
+        "batch": 0,
+    }
+    try:
+        with tqdm(total=spec.grid.size, disable=not show, unit="run", desc="sweep") as bar:
+            if sync:
+                for batch in _chunks(range(spec.grid.size), max(1, spec.grid.size // 100)):
+                    bar.update(results.add(run_batch(spec, batch)))
+                return {**info, "status": "complete"}
+            with _ClientContext(scheduler, workers, spec.grid.size) as client:
+                return {**_distributed(client, spec, results, bar), "status": "complete"}
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster is shut down (the context's
+        left = results.status == ""  # exit); the runs done are kept, the rest marked
+        results.status[left] = "interrupted"
+        results.message[left] = "not run: the sweep was interrupted"
+        return {**info, "status": "interrupted"}
 
 
 class _ClientContext:
@@ -316,6 +338,8 @@ def _reachable(address: str, timeout: float = 5.0) -> None:
             f"`scheduler`: {address!r:.80} is not a scheduler address tcp://host:port (for TLS "
             "or another protocol, pass a distributed.Client) or 'synchronous'"
         )
+    if not 0 < int(port) < 65536:
+        raise OptionError(f"`scheduler`: the port {int(port)} of {address!r:.80} is not 1-65535")
     with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
         pass
 
