@@ -30,6 +30,7 @@ from pfaff.core.symbols import (
 from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
+from pfaff.mechanics.shapes import ShapesMixin
 
 PIECE_KINDS = (
     "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
@@ -101,7 +102,7 @@ def _slot_name(system: SystemSpec, slot: int | Ref) -> str:
     return f"Derivative({slot.family.name}[{slot.stride}*{slot.index} + {slot.shift}], t)"
 
 
-class SystemSpec(ElementsMixin, EventsMixin):
+class SystemSpec(ElementsMixin, EventsMixin, ShapesMixin):
     """A constrained mechanical system as data: coordinates, pieces and their local forms.
 
     This is the model stage: every ``add_*`` method validates its piece when it is added. The
@@ -134,6 +135,7 @@ class SystemSpec(ElementsMixin, EventsMixin):
         self._pending_refs: dict = {}
         self.bodies: list = []  # rigid bodies (add_rigid_body), in order
         self.inputs: list = []  # parameters declared as inputs (add_input)
+        self.shapes: list = []  # drawn solids (add_shape), in order
         self.events: list[EventSpec] = []  # add_event, compiled with the model
 
     # ------------------------------------------------------------------ inspection helpers
