@@ -1,6 +1,6 @@
 // pfaff's trajectory viewer: a small WebGL2 renderer written for pfaff (MIT, as pfaff).
 // It reads the scene from the JSON block #pfaff-data of its page and fetches nothing:
-// instanced spheres (particles), ellipsoids and boxes (bodies) and rods (links), lit by two
+// particles as point sprites shaded as spheres, instanced ellipsoids and boxes (bodies) and rods (links), lit by two
 // directional lights; orbit with the mouse, zoom with the wheel, play / pause / scrub / speed.
 (function () {
   "use strict";
@@ -83,6 +83,20 @@
     "  float d = max(dot(n, normalize(vec3(0.4, -0.5, 0.8))), 0.0);\n" +
     "  float e = max(dot(n, normalize(vec3(-0.6, 0.4, 0.2))), 0.0);\n" +
     "  o = vec4(vc * (0.32 + 0.6 * d + 0.22 * e), 1.0); }\n";
+  // Particles: one point each, drawn as a lit sphere by its fragment shader (an impostor), so a
+  // ring of a thousand particles costs a thousand vertices.
+  var PVS = "#version 300 es\n" +
+    "layout(location=0) in vec3 pos; layout(location=1) in float rad; layout(location=2) in vec3 col;\n" +
+    "uniform mat4 vp; uniform float scale; out vec3 vc;\n" +
+    "void main() { vc = col; gl_Position = vp * vec4(pos, 1.0);\n" +
+    "  gl_PointSize = rad > 0.0 ? max(2.0, 2.0 * rad * scale / gl_Position.w) : 0.0; }\n";
+  var PFS = "#version 300 es\nprecision mediump float;\n" +
+    "in vec3 vc; out vec4 o;\n" +
+    "void main() { vec2 d = 2.0 * gl_PointCoord - 1.0; float r2 = dot(d, d);\n" +
+    "  if (r2 > 1.0) discard;\n" +
+    "  vec3 n = vec3(d.x, -d.y, sqrt(1.0 - r2));\n" +
+    "  float l = max(dot(n, normalize(vec3(-0.3, 0.5, 0.8))), 0.0);\n" +
+    "  o = vec4(vc * (0.35 + 0.7 * l), 1.0); }\n";
   function shader(type, src) {
     var s = gl.createShader(type);
     gl.shaderSource(s, src); gl.compileShader(s);
@@ -94,6 +108,19 @@
   gl.attachShader(prog, shader(gl.FRAGMENT_SHADER, FS));
   gl.linkProgram(prog);
   var vpLoc = gl.getUniformLocation(prog, "vp");
+  var pprog = gl.createProgram();
+  gl.attachShader(pprog, shader(gl.VERTEX_SHADER, PVS));
+  gl.attachShader(pprog, shader(gl.FRAGMENT_SHADER, PFS));
+  gl.linkProgram(pprog);
+  var pvpLoc = gl.getUniformLocation(pprog, "vp"), scaleLoc = gl.getUniformLocation(pprog, "scale");
+  var dotVao = gl.createVertexArray(), dotBuf = gl.createBuffer(), dotData = new Float32Array(Math.max(P, 1) * 7);
+  gl.bindVertexArray(dotVao);
+  gl.bindBuffer(gl.ARRAY_BUFFER, dotBuf);
+  gl.bufferData(gl.ARRAY_BUFFER, dotData.byteLength, gl.DYNAMIC_DRAW);
+  gl.enableVertexAttribArray(0); gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 28, 0);
+  gl.enableVertexAttribArray(1); gl.vertexAttribPointer(1, 1, gl.FLOAT, false, 28, 12);
+  gl.enableVertexAttribArray(2); gl.vertexAttribPointer(2, 3, gl.FLOAT, false, 28, 16);
+  gl.bindVertexArray(null);
 
   // One drawable per mesh: its vertices and a per-instance buffer of 15 floats
   // (three scaled axes, translation, colour).
@@ -117,11 +144,11 @@
     gl.bindVertexArray(null);
     return { vao: vao, ib: ib, data: data, n: verts.length / 6, count: count, used: 0 };
   }
-  var fine = sphereMesh(24, 14), coarse = P > 256 ? sphereMesh(10, 6) : sphereMesh(16, 10);
+  var fine = sphereMesh(24, 14);
   var kinds = D.kinds;
   var nEll = kinds.filter(function (k) { return k === "ellipsoid"; }).length;
   var GRID = D.ground === null ? 0 : 2 * 21;
-  var dots = drawable(coarse, P), ells = drawable(fine, nEll);
+  var ells = drawable(fine, nEll);
   var boxes = drawable(boxMesh(), B - nEll), rods = drawable(rodMesh(12), links.length + GRID);
 
   // ------------------------------------------------------------------ the scene at time t
@@ -188,12 +215,13 @@
   function fill(t) {
     var fr = frameAt(t), k, P3 = [];
     lo3 = [Infinity, Infinity, Infinity]; hi3 = [-Infinity, -Infinity, -Infinity];
-    dots.used = ells.used = boxes.used = rods.used = 0;
+    ells.used = boxes.used = rods.used = 0;
     for (k = 0; k < P; k++) {
-      var p = point(fr, k), r = radius[k];
+      var p = point(fr, k), r = radius[k], o = 7 * k;
       P3.push(p);
       if (r > 0) grow(p, r);
-      put(dots, [r, 0, 0], [0, r, 0], [0, 0, r], p, pcol[k]);
+      dotData[o] = p[0]; dotData[o + 1] = p[1]; dotData[o + 2] = p[2]; dotData[o + 3] = r;
+      dotData[o + 4] = pcol[k][0]; dotData[o + 5] = pcol[k][1]; dotData[o + 6] = pcol[k][2];
     }
     for (k = 0; k < B; k++) {
       var b = body(fr, k), h = half[k], cl = bodyColours[k % bodyColours.length];
@@ -263,13 +291,22 @@
     var vp = mul(perspective(0.7, canvas.width / Math.max(canvas.height, 1), R * 0.01, R * 10), lookAt(eye, c));
     gl.uniformMatrix4fv(vpLoc, false, vp);
     fill(t);
-    [dots, ells, boxes, rods].forEach(function (d) {
+    [ells, boxes, rods].forEach(function (d) {
       if (!d.used) return;
       gl.bindVertexArray(d.vao);
       gl.bindBuffer(gl.ARRAY_BUFFER, d.ib);
       gl.bufferSubData(gl.ARRAY_BUFFER, 0, d.data, 0, d.used * 15);
       gl.drawArraysInstanced(gl.TRIANGLES, 0, d.n, d.used);
     });
+    if (P) {
+      gl.useProgram(pprog);
+      gl.uniformMatrix4fv(pvpLoc, false, vp);
+      gl.uniform1f(scaleLoc, canvas.height / 2 / Math.tan(0.35));
+      gl.bindVertexArray(dotVao);
+      gl.bindBuffer(gl.ARRAY_BUFFER, dotBuf);
+      gl.bufferSubData(gl.ARRAY_BUFFER, 0, dotData, 0, P * 7);
+      gl.drawArrays(gl.POINTS, 0, P);
+    }
     gl.bindVertexArray(null);
     label.textContent = D.title + "   t = " + t.toFixed(D.decimals) + " s";
     drawn++;
@@ -313,5 +350,16 @@
   }, { passive: false });
   canvas.addEventListener("dblclick", function () { cam.yaw = D.view[0]; cam.pitch = D.view[1]; cam.dist = 1; });
   setTime(t0);
+  if (location.hash === "#bench") { // benchmarks/viewer.py: frames drawn per second, synchronously
+    var px = new Uint8Array(4), n = 120, start = performance.now();
+    for (var k = 0; k < n; k++) {
+      draw(t0 + (t1 - t0) * k / n);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px); // waits for the frame
+    }
+    root.dataset.benchFps = String(n / ((performance.now() - start) / 1000));
+    start = performance.now();
+    for (k = 0; k < n; k++) fill(t0 + (t1 - t0) * k / n); // the script's share of a frame
+    root.dataset.benchFillMs = String((performance.now() - start) / n);
+  }
   requestAnimationFrame(tick);
 })();

@@ -7,7 +7,7 @@ page fetches nothing (no ``src=``/``href=`` to another file, no ``import``, ``fe
 :func:`show` wraps the same page in an ``<iframe srcdoc=…>`` for Jupyter (JupyterLab, classic, VS
 Code): a :class:`Viewer` whose ``_repr_html_`` a notebook displays.
 
-Why not three.js: the scene needs four instanced meshes (spheres, ellipsoids, boxes, rods) and
+Why not three.js: the scene needs point sprites shaded as spheres and three instanced meshes (ellipsoids, boxes, rods) and
 two lights; a 300-line renderer does that, adds ~15 KB to a file instead of ~650 KB, has no
 vendored code to keep updated and no strings that name a network address.
 
