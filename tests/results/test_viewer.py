@@ -10,6 +10,7 @@ import json
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -284,6 +285,8 @@ def test_twenty_seconds_of_the_bicycle_fit_in_five_megabytes(tmp_path):
     assert s["nbodies"] == 4 and s["nframes"] == 601 and s["follow"]
     # the wheels touch the ground: the lowest point of anything drawn is at z = 0
     assert abs(s["ground"]) < 1e-3
+    if BROWSER is not None:
+        assert drawn_fraction(path, tmp_path / "bicycle.png") > 0.005
 
 
 # ---------------------------------------------------------------------------- a real browser
@@ -308,11 +311,15 @@ OFFLINE = [
 @pytest.mark.skipif(BROWSER is None, reason="no headless Chromium on this machine")
 @pytest.mark.parametrize("which", ["body", "ring"])
 def test_headless_browser_draws_a_scene_offline(which, body_run, ring_run, tmp_path):
-    from PIL import Image
-
     run = {"body": body_run[1], "ring": ring_run}[which]
     page = run.to_html(tmp_path / "scene.html")
-    shot = tmp_path / "scene.png"
+    assert drawn_fraction(page, tmp_path / "scene.png") > 0.005  # the solid or the ring
+
+
+def drawn_fraction(page: Path, shot: Path) -> float:
+    """Screenshot ``page`` headless with the network off: the share of the canvas not background."""
+    from PIL import Image
+
     subprocess.run(
         [BROWSER, *OFFLINE, f"--screenshot={shot}", page.as_uri()],
         capture_output=True,
@@ -325,8 +332,7 @@ def test_headless_browser_draws_a_scene_offline(which, body_run, ring_run, tmp_p
         timeout=120,
         text=True,
     ).stdout
-    assert 'data-ready="yes"' in dom
+    assert 'data-ready="yes"' in dom  # the script ran and drew
     rgb = np.asarray(Image.open(shot).convert("RGB"), dtype=int)[:-40]  # above the controls
     background = np.array([247, 247, 245])
-    drawn = (np.abs(rgb - background).sum(axis=-1) > 60).mean()
-    assert drawn > 0.005  # the solid or the ring covers part of the canvas
+    return float((np.abs(rgb - background).sum(axis=-1) > 60).mean())

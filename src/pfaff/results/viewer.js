@@ -350,6 +350,8 @@
   }, { passive: false });
   canvas.addEventListener("dblclick", function () { cam.yaw = D.view[0]; cam.pitch = D.view[1]; cam.dist = 1; });
   setTime(t0);
+  draw(now); // the first frame at once, whenever the browser starts animating
+  root.dataset.ready = "yes";
   if (location.hash === "#bench") { // benchmarks/viewer.py: frames drawn per second, synchronously
     var px = new Uint8Array(4), n = 120, start = performance.now();
     for (var k = 0; k < n; k++) {
