@@ -5,8 +5,8 @@ The 3-D viewer
 ``traj.to_html(path)`` writes one HTML file that plays a run offline (drag to turn, wheel to
 zoom, play, pause, scrub, speed); ``traj.show()`` is the same scene in a notebook. Rigid bodies
 are drawn as the ellipsoids of their mass and inertia. Here a free body spun near its
-intermediate axis; the figure below is the same run as a GIF frame strip drawn by matplotlib,
-and the page written is linked after it.
+intermediate axis: first six moments of the run drawn by matplotlib, then the viewer itself,
+live in this page.
 """
 
 import tempfile
@@ -41,3 +41,9 @@ for i in range(6):
     ax.set_title(f"t = {frames.t[i]:.1f} s", fontsize=8)
     lim = solid.half.max()
     ax.set(xlim=(-lim, lim), ylim=(-lim, lim), zlim=(-lim, lim))
+
+# %%
+# The scene itself, live (drag to turn it; it fetches nothing):
+
+# sphinx_gallery_capture_repr = ('_repr_html_',)
+traj.show(height=360)
