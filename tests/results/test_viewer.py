@@ -162,6 +162,29 @@ def test_ring_of_1024_keeps_its_frames_under_the_data_budget(ring_run):
     assert s["nframes"] == 61  # 2 s at 30 frames per second fit the budget
 
 
+def test_arrows_carry_the_rod_force_at_the_frames():
+    """The Cartesian pendulum's rod force Aᵀλ = 2λ (x, y) on the bob: the page's arrows hold it
+    at each frame (interpolated from the reported states) against a run reported at those times."""
+    model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2})
+    run = pfaff.simulate(model, [2.0, 0.0], [0.0, 0.0], (0.0, 1.0), t_eval=np.linspace(0, 1, 2001))
+
+    def rod(t, q, qd, lam):
+        return q, 2 * lam[0] * q
+
+    s = scene_of(render(run, fps=20, arrows={"rod": rod}))
+    t = floats(s["t"], np.float64)
+    arrows = floats(s["arrows"]).reshape(len(t), 1, 6)
+    ref = pfaff.simulate(model, [2.0, 0.0], [0.0, 0.0], (0.0, 1.0), t_eval=t)
+    force = 2 * ref.multipliers[:, :1] * ref.q
+    np.testing.assert_allclose(arrows[:, 0, :2], ref.q, atol=1e-5)
+    np.testing.assert_allclose(arrows[:, 0, 3:5], force, atol=1e-4 * np.abs(force).max())
+    # |force| = tension; the largest arrow is a quarter of the scene
+    top = np.linalg.norm(arrows[:, 0, 3:], axis=1).max()
+    assert s["arrow_scale"] * top == pytest.approx(0.25 * s["extent"], rel=1e-6)
+    with pytest.raises(OptionError, match="arrows"):
+        render(run, arrows={"bad": lambda *a: 1.0})
+
+
 def test_names_cannot_break_out_of_the_page(pendulum_run):
     page = render(pendulum_run, title="</script><script>alert(1)</script>")
     assert page.count("<script") == 2

@@ -405,6 +405,7 @@ class Trajectory:
         up: str | None = None,
         title: str | None = None,
         max_frames: int = 3000,
+        arrows: dict | None = None,
     ) -> Path:
         """Write an interactive 3-D view of the motion: one HTML file that plays offline.
 
@@ -427,6 +428,10 @@ class Trajectory:
         title : str, optional
             Default: the system's name.
         max_frames : int, optional
+        arrows : dict, optional
+            Forces drawn as arrows (red, one scale): name → ``f(t, q, qd, multipliers)``
+            returning ``(at, force)``, each of the model's 2 or 3 components; e.g. a contact
+            force from its multipliers. Evaluated at the reported states.
 
         Returns
         -------
@@ -450,7 +455,16 @@ class Trajectory:
         """
         from pfaff.results.viewer import to_html
 
-        return to_html(self, path, fps=fps, solid=solid, up=up, title=title, max_frames=max_frames)
+        return to_html(
+            self,
+            path,
+            fps=fps,
+            solid=solid,
+            up=up,
+            title=title,
+            max_frames=max_frames,
+            arrows=arrows,
+        )
 
     def show(self, *, height: int = 480, **options: Any) -> Any:
         """The interactive 3-D view for a notebook (Jupyter, VS Code): shown as a cell's value.

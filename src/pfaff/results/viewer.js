@@ -20,6 +20,7 @@
   function floats(b64) { return new Float32Array(bytes(b64)); }
   var T = new Float64Array(bytes(D.t)), F = T.length, P = D.npoints, B = D.nbodies, dim = D.dim;
   var PTS = floats(D.points), CEN = floats(D.centres), QUA = floats(D.quaternions);
+  var NA = D.narrows, ARR = floats(D.arrows);
   var links = D.links, radius = D.radius, pcol = D.point_colours, half = D.half;
   var up = D.up_matrix; // model -> world (z up), row-major 3x3
 
@@ -54,6 +55,16 @@
         n[f[a][0]] = s;
         v.push(p[0], p[1], p[2], n[0], n[1], n[2]);
       }
+    }
+    return v;
+  }
+  function coneMesh(nu) { // radius 1 at z = 0 to the tip at z = 1
+    var v = [], k = 1 / Math.SQRT2;
+    for (var i = 0; i < nu; i++) {
+      var a0 = 2 * Math.PI * i / nu, a1 = 2 * Math.PI * (i + 1) / nu;
+      var c0 = Math.cos(a0), s0 = Math.sin(a0), c1 = Math.cos(a1), s1 = Math.sin(a1);
+      v.push(c0, s0, 0, c0 * k, s0 * k, k, c1, s1, 0, c1 * k, s1 * k, k, 0, 0, 1, c0 * k, s0 * k, k);
+      v.push(c0, s0, 0, 0, 0, -1, c1, s1, 0, 0, 0, -1, 0, 0, 0, 0, 0, -1);
     }
     return v;
   }
@@ -149,7 +160,8 @@
   var nEll = kinds.filter(function (k) { return k === "ellipsoid"; }).length;
   var GRID = D.ground === null ? 0 : 2 * 21;
   var ells = drawable(fine, nEll);
-  var boxes = drawable(boxMesh(), B - nEll), rods = drawable(rodMesh(12), links.length + GRID);
+  var boxes = drawable(boxMesh(), B - nEll), rods = drawable(rodMesh(12), links.length + GRID + NA);
+  var heads = drawable(coneMesh(12), NA);
 
   // ------------------------------------------------------------------ the scene at time t
   function put(d, c0, c1, c2, p, col) {
@@ -212,10 +224,27 @@
       put(rods, [0, w, 0], [0, 0, w], [L, 0, 0], [gx - n * s, gy + i * s, D.ground], g);
     }
   }
+  function along(d, L) { // two unit vectors across the direction d of length L
+    var e = Math.abs(d[0]) < 0.9 * L ? [1, 0, 0] : [0, 1, 0];
+    var u = [d[1] * e[2] - d[2] * e[1], d[2] * e[0] - d[0] * e[2], d[0] * e[1] - d[1] * e[0]];
+    var nu = Math.hypot(u[0], u[1], u[2]);
+    u = [u[0] / nu, u[1] / nu, u[2] / nu];
+    return [u, [(d[1] * u[2] - d[2] * u[1]) / L, (d[2] * u[0] - d[0] * u[2]) / L,
+                (d[0] * u[1] - d[1] * u[0]) / L]];
+  }
+  function arrow(p, d, col) {
+    var L = Math.hypot(d[0], d[1], d[2]);
+    if (!(L > 0)) return;
+    var uv = along(d, L), u = uv[0], v = uv[1], h = Math.min(0.3 * L, 0.06 * extent), r = h / 3;
+    var s = (L - h) / L, w = 0.4 * r;
+    put(rods, [u[0] * w, u[1] * w, u[2] * w], [v[0] * w, v[1] * w, v[2] * w], [d[0] * s, d[1] * s, d[2] * s], p, col);
+    put(heads, [u[0] * r, u[1] * r, u[2] * r], [v[0] * r, v[1] * r, v[2] * r], [d[0] * h / L, d[1] * h / L, d[2] * h / L],
+        [p[0] + d[0] * s, p[1] + d[1] * s, p[2] + d[2] * s], col);
+  }
   function fill(t) {
     var fr = frameAt(t), k, P3 = [];
     lo3 = [Infinity, Infinity, Infinity]; hi3 = [-Infinity, -Infinity, -Infinity];
-    ells.used = boxes.used = rods.used = 0;
+    ells.used = boxes.used = rods.used = heads.used = 0;
     for (k = 0; k < P; k++) {
       var p = point(fr, k), r = radius[k], o = 7 * k;
       P3.push(p);
@@ -236,13 +265,14 @@
       var d = [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]];
       var L = Math.hypot(d[0], d[1], d[2]);
       if (!(L > 0)) { put(rods, [0, 0, 0], [0, 0, 0], [0, 0, 0], pa, rodColour); continue; }
-      var e = Math.abs(d[0]) < 0.9 * L ? [1, 0, 0] : [0, 1, 0];
-      var u = [d[1] * e[2] - d[2] * e[1], d[2] * e[0] - d[0] * e[2], d[0] * e[1] - d[1] * e[0]];
-      var nu = Math.hypot(u[0], u[1], u[2]);
-      u = [u[0] / nu, u[1] / nu, u[2] / nu];
-      var v = [(d[1] * u[2] - d[2] * u[1]) / L, (d[2] * u[0] - d[0] * u[2]) / L,
-               (d[0] * u[1] - d[1] * u[0]) / L];
+      var uv = along(d, L), u = uv[0], v = uv[1];
       put(rods, [u[0] * rr, u[1] * rr, u[2] * rr], [v[0] * rr, v[1] * rr, v[2] * rr], d, pa, rodColour);
+    }
+    for (k = 0; k < NA; k++) {
+      var i0 = (fr[0] * NA + k) * 6, i1 = (fr[1] * NA + k) * 6, f = fr[2], g = [];
+      for (var c = 0; c < 6; c++) g.push(ARR[i0 + c] * (1 - f) + ARR[i1 + c] * f);
+      var sc = D.arrow_scale;
+      arrow(world([g[0], g[1], g[2]]), world([g[3] * sc, g[4] * sc, g[5] * sc]), [0.85, 0.1, 0.1]);
     }
     if (D.follow && lo3[0] <= hi3[0]) cam.centre = [(lo3[0] + hi3[0]) / 2, (lo3[1] + hi3[1]) / 2, (lo3[2] + hi3[2]) / 2];
     if (GRID) grid(cam.centre);
@@ -291,7 +321,7 @@
     var vp = mul(perspective(0.7, canvas.width / Math.max(canvas.height, 1), R * 0.01, R * 10), lookAt(eye, c));
     gl.uniformMatrix4fv(vpLoc, false, vp);
     fill(t);
-    [ells, boxes, rods].forEach(function (d) {
+    [ells, boxes, rods, heads].forEach(function (d) {
       if (!d.used) return;
       gl.bindVertexArray(d.vao);
       gl.bindBuffer(gl.ARRAY_BUFFER, d.ib);

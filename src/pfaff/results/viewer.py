@@ -97,8 +97,14 @@ def scene(
     solid: str = "ellipsoid",
     up: str | None = None,
     title: str | None = None,
+    arrows: dict | None = None,
 ) -> dict[str, Any]:
     """The scene of a trajectory as the viewer reads it (JSON-ready; arrays in base64).
+
+    ``arrows`` maps a name to a function ``f(t, q, qd, multipliers) -> (at, vector)`` (two
+    sequences of ``dim`` numbers: where the arrow starts, and the force), evaluated at every
+    reported state and interpolated linearly to the frames; arrows are drawn to one scale, the
+    largest a quarter of the scene.
 
     Examples
     --------
@@ -132,7 +138,9 @@ def scene(
         for n, k, r in zip(geo.names, geo.kinds, radius, strict=True)
     ]
     half_top = float(solids.half.max()) if B else 0.0
-    local = _local_extent(data) + 2 * half_top
+    arrow_data = _arrows(traj, arrows, data.t, d)
+    anchored = any(-1 in pair for pair in geo.links)  # a link to the fixed origin: it is drawn
+    local = _local_extent(data, anchored) + 2 * half_top
     follow = bool(local < 0.5 * extent)
     shown = (local if follow else extent) or 1.0
     U = _up_matrix(up)
@@ -155,12 +163,16 @@ def scene(
         "rod_radius": 0.35 * float(np.median([r for r in radius if r > 0] or [0.02 * extent])),
         "point_colours": _colours(geo),
         "centre": _pad3((lo + hi) / 2).tolist(),
-        "extent": shown if follow else extent + 2 * half_top,
+        "extent": (size := shown if follow else extent + 2 * half_top),
         "follow": follow,
         "ground": ground,
         "spacing": _nice(shown / 4),
         "up_matrix": U.reshape(-1).tolist(),
         "view": [-math.pi / 2, 0.0] if d == 2 else [-math.pi / 3, 0.45],
+        "narrows": arrow_data.shape[1],
+        "arrows": _b64(arrow_data.astype(np.float32)),
+        "arrow_names": list(arrows or {}),
+        "arrow_scale": _arrow_scale(arrow_data, size),
     }
 
 
@@ -256,6 +268,40 @@ def _bounds(data: Any) -> tuple[np.ndarray, np.ndarray]:
     return pts.min(axis=0), pts.max(axis=0)
 
 
+def _arrows(traj: Trajectory, arrows: object, times: np.ndarray, dim: int) -> np.ndarray:
+    """Arrow starts and vectors at the frame times, shape (F, A, 6) (3-D components)."""
+    if arrows is None:
+        return np.zeros((len(times), 0, 6))
+    if not isinstance(arrows, dict) or not all(
+        isinstance(k, str) and callable(f) for k, f in arrows.items()
+    ):
+        raise OptionError("`arrows` must map names to functions f(t, q, qd, multipliers)")
+    out = np.zeros((len(times), len(arrows), 6))
+    for a, (name, fn) in enumerate(arrows.items()):
+        rows = []
+        for k in range(len(traj.t)):
+            try:
+                at, vec = fn(traj.t[k], traj.q[k], traj.qd[k], traj.multipliers[k])
+                row = np.concatenate([_pad3(np.ravel(at)), _pad3(np.ravel(vec))])
+            except (TypeError, ValueError, IndexError) as e:
+                raise OptionError(
+                    f"`arrows['{name}']` must return (at, vector), each of {dim} numbers: {e}"
+                ) from e
+            if row.shape != (6,):
+                raise OptionError(f"`arrows['{name}']` must return two points of {dim} numbers")
+            rows.append(row)
+        values = np.array(rows, dtype=float)
+        for c in range(6):
+            out[:, a, c] = np.interp(times, traj.t, values[:, c])
+    return out
+
+
+def _arrow_scale(arrow_data: np.ndarray, extent: float) -> float:
+    """Length per unit force: the largest arrow a quarter of the scene."""
+    top = float(np.nanmax(np.linalg.norm(arrow_data[..., 3:], axis=-1), initial=0.0))
+    return 0.25 * extent / top if top > 0 else 0.0
+
+
 def _colours(geo: Any) -> list[list[float]]:
     """Point colours by kind; a family's first drawn member red, so that it is seen to turn."""
     out = [_POINT_COLOURS[k] for k in geo.kinds]
@@ -264,9 +310,12 @@ def _colours(geo: Any) -> list[list[float]]:
     return out
 
 
-def _local_extent(data: Any) -> float:
-    """The largest extent of the scene at one time (what a camera that follows must show)."""
+def _local_extent(data: Any, anchored: bool = False) -> float:
+    """The largest extent of the scene at one time (what a camera that follows must show),
+    the fixed origin included when something is linked to it."""
     parts = [a for a in (data.points, data.centres) if a.shape[1]]
+    if anchored:
+        parts.append(np.zeros((len(data.t), 1, data.points.shape[-1])))
     if not parts:
         return 0.0
     every = np.concatenate(parts, axis=1)
