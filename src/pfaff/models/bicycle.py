@@ -276,8 +276,10 @@ def _add_shapes(bike: System, kin: dict, rear_contact: object) -> None:
             r = sp.Symbol("rR" if body.name.startswith("rear") else "rF")
             size = [r, r / 12, r]  # the axle is the wheel frame's y
             bike.add_shape(where, body.frame, size=size, name=body.name, frame=N)
-        else:
-            inertia = body.central_inertia.to_matrix(body.frame)
+        else:  # Meijaard's table: I_xx, I_yy, I_zz and I_xz of the frame (B) and the fork (H)
+            b = "B" if body.name == "frame" else "H"
+            ixx, iyy, izz, ixz = (sp.Symbol(f"I{b}{k}") for k in ("xx", "yy", "zz", "xz"))
+            inertia = sp.Matrix([[ixx, 0, ixz], [0, iyy, 0], [ixz, 0, izz]])
             bike.add_shape(
                 where, body.frame, mass=body.mass, inertia=inertia, name=body.name, frame=N
             )
