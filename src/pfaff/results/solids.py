@@ -7,7 +7,9 @@ is turned to the body's principal axes):
 
     aᵢ² = c/(2m) (Iⱼ + Iₖ − Iᵢ),   c = 5 (ellipsoid) or 3 (box).
 
-The box is exact for rods and plates, the ellipsoid for spheres and discs look like discs. A
+The box is exact for rods and plates, the ellipsoid for spheres and discs look like discs. A planar
+body, known by its one moment about z, is drawn as the disc of that moment (a rod and a disc of
+the same moment cannot be told apart: declare the shape with ``add_shape(size=...)``). A
 semi-axis that comes out zero or imaginary (a thin disc, a point mass, a planar body with one
 moment) is raised to :data:`THIN` of the largest; a body with no usable size at all gets
 :data:`FALLBACK` of the scene's extent. Shapes given by their semi-axes (``add_shape(size=…)``)
