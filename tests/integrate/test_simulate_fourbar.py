@@ -24,39 +24,19 @@ import re
 
 import numpy as np
 import pytest
-import sympy as sp
 from scipy.integrate import solve_ivp
 
 import pfaff
 from methods import ALL_METHODS
 
-P = {"a": 1.0, "L": 2.0, "m1": 1.0, "m2": 2.0, "m3": 1.0, "g": 9.81}
+P = dict(pfaff.models.FOURBAR)
 TH0, W0, T_END = 0.3, 8.0, 2.0  # passes θ = π, 2π, 3π, 4π (≈ 2.3 turns)
 INERTIA = (P["m1"] / 3 + P["m3"] / 3 + P["m2"]) * P["a"] ** 2
 GRAVITY_TORQUE = (P["m1"] / 2 + P["m2"] + P["m3"] / 2) * P["g"] * P["a"]
 
 
 def four_bar() -> pfaff.System:
-    t = pfaff.t
-    th1, th2, th3 = pfaff.coordinates("theta1 theta2 theta3")
-    a, L, m1, m2, m3, g = sp.symbols("a L m1 m2 m3 g")
-    w1, w2, w3 = (q.diff(t) for q in (th1, th2, th3))
-    vx = -a * sp.sin(th1) * w1 - L / 2 * sp.sin(th2) * w2  # coupler centre
-    vy = a * sp.cos(th1) * w1 + L / 2 * sp.cos(th2) * w2
-    s = pfaff.System([th1, th2, th3], name="parallelogram four-bar")
-    s.add_kinetic_energy(m1 * a**2 / 6 * w1**2, name="crank")
-    s.add_kinetic_energy(m2 / 2 * (vx**2 + vy**2) + m2 * L**2 / 24 * w2**2, name="coupler")
-    s.add_kinetic_energy(m3 * a**2 / 6 * w3**2, name="rocker")
-    s.add_potential_energy(
-        g * (m1 * a / 2 * sp.sin(th1) + m2 * (a * sp.sin(th1) + L / 2 * sp.sin(th2))),
-        name="gravity crank, coupler",
-    )
-    s.add_potential_energy(g * m3 * a / 2 * sp.sin(th3), name="gravity rocker")
-    s.add_holonomic_constraint(
-        a * sp.cos(th1) + L * sp.cos(th2) - L - a * sp.cos(th3), name="loop x"
-    )
-    s.add_holonomic_constraint(a * sp.sin(th1) + L * sp.sin(th2) - a * sp.sin(th3), name="loop y")
-    return s
+    return pfaff.models.parallelogram_fourbar()
 
 
 @pytest.fixture(scope="module")

@@ -43,6 +43,7 @@ from pfaff.core.symbols import local_q, t
 if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
     from pfaff.mechanics.bodies import Body
+    from pfaff.mechanics.shapes import Shape
     from pfaff.mechanics.system import Piece, SystemSpec
 
 MAX_POINTS = 2000  # drawn instances of one family template at most
@@ -120,12 +121,14 @@ class Geometry:
         params: tuple[sp.Symbol, ...],
         values: Sequence[float],
         dim: int,
+        sizes: list[tuple[str, tuple[sp.Expr, ...]]] | None = None,
     ) -> None:
         self.name = str(system.name)
         self.n = int(system.n)
         self.dim = dim
         self.names, self.kinds, self.families = names, kinds, families
         self.body_names = [b[0] for b in bodies]
+        self._sizes = list(sizes or [])
         self.planar_bodies = [b[1] for b in bodies]
         self._groups, self._bodies, self._constraints = groups, bodies, constraints
         self._params = params
@@ -282,6 +285,32 @@ class Geometry:
             dcm[..., k, :, :] = np.stack(vals[self.dim :], axis=-1).reshape((*lead, 3, 3))
         return centres, dcm
 
+    def sizes(self) -> list[tuple[str, np.ndarray]]:
+        """What sizes each drawn solid, at the parameter values.
+
+        Returns
+        -------
+        list of (str, ndarray), length B
+            ``("inertia", [m, I₁₁, I₁₂, …, I₃₃])`` for a rigid body (or a shape given by its
+            inertia), ``("ellipsoid" | "box", [a, b, c])`` (semi-axes) for a shape given by size.
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.torque_free_body("mrp").equations().compile(
+        ...     {"I1": 1, "I2": 2, "I3": 3})
+        >>> kind, v = model.geometry.sizes()[0]
+        >>> kind, v.tolist()
+        ('inertia', [1.0, 1.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 3.0])
+        """
+        out = []
+        for kind, exprs in self._sizes:
+            fn = sp.lambdify(list(self._params), list(exprs), modules="numpy", docstring_limit=0)
+            with np.errstate(all="ignore"):
+                vals = np.array(fn(*self._values), dtype=float).reshape(-1)
+            out.append((kind, vals))
+        return out
+
     # ------------------------------------------------------------------ links
     @property
     def links(self) -> list[tuple[int, int]]:
@@ -354,7 +383,9 @@ def _instances(piece: Piece) -> tuple[list[tuple[int, ...]], list[int]]:
     return [tuple(r) for r in cols.tolist()], (inst + tmpl.lo).tolist()
 
 
-def _body(system: SystemSpec, body: Body, dim: int) -> tuple[str, bool, tuple[int, ...], tuple]:
+def _body(
+    system: SystemSpec, body: Body | Shape, dim: int
+) -> tuple[str, bool, tuple[int, ...], tuple]:
     """(name, planar, coordinate columns, local exprs: centre (dim), then C row by row)."""
     centre = [*body.position] + [sp.S.Zero] * (dim - body.position.rows)
     exprs = [*centre, *body.dcm]
@@ -365,7 +396,9 @@ def _body(system: SystemSpec, body: Body, dim: int) -> tuple[str, bool, tuple[in
     cols = tuple(system._resolve(f) for f in funcs)
     rule = {f: local_q(a) for a, f in enumerate(funcs)}
     local = tuple(sp.sympify(e).xreplace(rule) for e in exprs)
-    return body.name, body.attitude.kind == "planar", cols, local
+    attitude = getattr(body, "attitude", None)
+    planar = attitude.kind == "planar" if attitude is not None else body.position.rows == 2
+    return body.name, planar, cols, local
 
 
 def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
@@ -384,7 +417,8 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
     """
     system = getattr(eom, "system", None)
     pieces = [p for p in getattr(system, "pieces", ()) if p.kind == "particle"]
-    if system is None or not pieces:
+    shapes = list(getattr(system, "shapes", ()))
+    if system is None or not (pieces or shapes):
         return None
     pieces += [p for p in system.pieces if p.kind == "force" and p.template is None]
     groups: dict[tuple, _Group] = {}
@@ -406,8 +440,10 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
             names += [f"{piece.name} {i}" for i in ks]
             kinds += ["family"] * len(ks)
             families.append((piece.name, start, len(names)))
-    dim = max(len(g.exprs) for g in groups.values())
-    bodies = [_body(system, body, dim) for body in system.bodies]
+    dims = [len(g.exprs) for g in groups.values()] + [s.position.rows for s in shapes]
+    dim = max(dims)
+    solids = [*system.bodies, *shapes]
+    bodies = [_body(system, body, dim) for body in solids]
     linkable = sum(k != "family" for k in kinds)
     constraints = []
     if linkable <= LINK_POINTS:
@@ -427,4 +463,13 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
         tuple(eom.parameters),
         values,
         dim,
+        [_size_exprs(b) for b in solids],
     )
+
+
+def _size_exprs(body: Body | Shape) -> tuple[str, tuple[sp.Expr, ...]]:
+    """What sizes a drawn solid: ``("inertia", (m, I row by row))`` or ``(kind, semi-axes)``."""
+    kind = getattr(body, "kind", None)
+    if kind is not None:
+        return kind, tuple(body.size)
+    return "inertia", (body.mass, *body.inertia)

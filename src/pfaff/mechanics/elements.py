@@ -110,20 +110,8 @@ class ElementsMixin:
     def _attitude(self: SystemSpec, attitude: object, frame: object, what: str) -> Attitude:
         """The attitude set of a body; a ReferenceFrame B becomes Rotation(N.dcm(B))."""
         if isinstance(attitude, ReferenceFrame):
-            inertial = frame if frame is not None else self.frame
-            if inertial is None:
-                raise ModelError(
-                    f"attitude of {what} is the ReferenceFrame {attitude}: give the inertial "
-                    "frame N as pfaff.System(..., frame=N) (or add_rigid_body(..., frame=N))"
-                )
-            try:
-                dcm = inertial.dcm(attitude)
-            except ValueError as e:
-                raise ModelError(
-                    f"attitude of {what}: the frame {attitude} is not oriented relative to the "
-                    f"inertial frame {inertial} ({e})"
-                ) from e
-            return Rotation(dcm, source=f"{inertial}.dcm({attitude})")
+            dcm, source = self._frame_dcm(attitude, frame, what)
+            return Rotation(dcm, source=source)
         if not isinstance(attitude, Attitude):
             raise ModelTypeError(
                 "`attitude` must be a pfaff.attitude set (EulerAngles, Quaternion, MRP, "
@@ -131,6 +119,25 @@ class ElementsMixin:
                 f"{type(attitude).__name__}"
             )
         return attitude
+
+    def _frame_dcm(
+        self: SystemSpec, attitude: ReferenceFrame, frame: object, what: str
+    ) -> tuple[sp.Matrix, str]:
+        """N.dcm(B) of a ReferenceFrame B, N the inertial frame, and where it came from."""
+        inertial = frame if frame is not None else self.frame
+        if inertial is None:
+            raise ModelError(
+                f"attitude of {what} is the ReferenceFrame {attitude}: give the inertial "
+                "frame N as pfaff.System(..., frame=N) (or `frame=N`)"
+            )
+        try:
+            dcm = inertial.dcm(attitude)
+        except ValueError as e:
+            raise ModelError(
+                f"attitude of {what}: the frame {attitude} is not oriented relative to the "
+                f"inertial frame {inertial} ({e})"
+            ) from e
+        return sp.Matrix(dcm), f"{inertial}.dcm({attitude})"
 
     def _check_attitude_coordinates(self: SystemSpec, attitude: Attitude, what: str) -> None:
         """Coordinates of this system; shared between bodies only by Rotation attitudes."""

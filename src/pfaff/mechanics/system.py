@@ -33,6 +33,7 @@ from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
 from pfaff.mechanics.smooth import kinks
+from pfaff.mechanics.shapes import ShapesMixin
 
 PIECE_KINDS = (
     "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
@@ -104,7 +105,7 @@ def _slot_name(system: SystemSpec, slot: int | Ref) -> str:
     return f"Derivative({slot.family.name}[{slot.stride}*{slot.index} + {slot.shift}], t)"
 
 
-class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
+class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin, ShapesMixin):
     """A constrained mechanical system as data: coordinates, pieces and their local forms.
 
     This is the model stage: every ``add_*`` method validates its piece when it is added. The
@@ -137,6 +138,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
         self._pending_refs: dict = {}
         self.bodies: list = []  # rigid bodies (add_rigid_body), in order
         self.inputs: list = []  # parameters declared as inputs (add_input)
+        self.shapes: list = []  # drawn solids (add_shape), in order
         self.events: list[EventSpec] = []  # add_event, compiled with the model
         self.contacts: list[ContactSpec] = []  # add_unilateral_constraint (derive/contacts)
         self._defaults: dict[str, float] = {}  # set_parameter_defaults

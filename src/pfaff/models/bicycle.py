@@ -257,11 +257,32 @@ def whipple_bicycle() -> Bicycle:
         bike.add_velocity_constraint(me.dot(v, Y.x), name=f"{wheel} no slip x")
         bike.add_velocity_constraint(me.dot(v, Y.y), name=f"{wheel} no slip y")
     x, y, psi, phi, th_r, _, delta, th_f = q
+    _add_shapes(bike, kin, x * N.x + y * N.y)
     bike.values = dict(MEIJAARD)
     bike.independent = [x, y, psi, phi, th_r, delta, th_f]
     bike.independent_speeds = [phi, th_r, delta]
     bike.lean_steer = [phi, delta, speed(phi), speed(delta)]
     return bike
+
+
+def _add_shapes(bike: System, kin: dict, rear_contact: object) -> None:
+    """What animations and the viewer draw (``add_shape``; nothing enters the equations): the
+    wheels as discs of their radii, the frame with its rider and the fork as the ellipsoids of
+    their masses and inertias."""
+    N = kin["N"]
+    for body in kin["bodies"]:
+        where = rear_contact + body.masscenter.pos_from(kin["P"])
+        if "wheel" in body.name:
+            r = sp.Symbol("rR" if body.name.startswith("rear") else "rF")
+            size = [r, r / 12, r]  # the axle is the wheel frame's y
+            bike.add_shape(where, body.frame, size=size, name=body.name, frame=N)
+        else:  # Meijaard's table: I_xx, I_yy, I_zz and I_xz of the frame (B) and the fork (H)
+            b = "B" if body.name == "frame" else "H"
+            ixx, iyy, izz, ixz = (sp.Symbol(f"I{b}{k}") for k in ("xx", "yy", "zz", "xz"))
+            inertia = sp.Matrix([[ixx, 0, ixz], [0, iyy, 0], [ixz, 0, izz]])
+            bike.add_shape(
+                where, body.frame, mass=body.mass, inertia=inertia, name=body.name, frame=N
+            )
 
 
 def bicycle_operating_point(v: float, values: dict | None = None) -> dict:

@@ -3,8 +3,9 @@
 What is drawn comes from the model's geometry (``model.geometry``, built when the model is
 compiled, carried by the :class:`~pfaff.results.trajectory.Trajectory`; see
 :mod:`pfaff.derive.geometry`): particles as dots, the lines its link rule finds (or the pairs
-given as ``links=``), each rigid body as its three axes from its mass centre (red x, green y, blue
-z; scaled to the figure), a family of particles (the ring) as its points, its centre and a spoke
+given as ``links=``), each rigid body (and ``add_shape`` shape) as a solid — the ellipsoid or box
+of its mass and inertia (:mod:`pfaff.results.solids`), shaded faces in 3-D, its section in 2-D —
+with its three axes from its mass centre (red x, green y, blue z; scaled to the figure), a family of particles (the ring) as its points, its centre and a spoke
 to its first drawn member, and the points where forces act as crosses. Planar systems are drawn in
 2-D, spatial ones in 3-D (mplot3d). The title shows t.
 
@@ -31,6 +32,7 @@ import numpy as np
 
 from pfaff.core.errors import OptionError, StateError
 from pfaff.core.files import atomic_path
+from pfaff.results.solids import Solids, outline, shaded, solids_of, unit_faces
 
 if TYPE_CHECKING:
     from pfaff.results.trajectory import Trajectory
@@ -38,6 +40,7 @@ if TYPE_CHECKING:
 FORMATS = ("gif", "mp4")
 MAX_FRAMES = 10_000
 AXIS_COLOURS = ("tab:red", "tab:green", "tab:blue")
+SOLID_COLOURS = ("tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:cyan", "tab:olive")
 
 
 def check_path(path: str | os.PathLike) -> str:
@@ -204,6 +207,7 @@ def animate(
     size: float = 4.0,
     dpi: int = 80,
     title: str | None = None,
+    solid: str = "ellipsoid",
 ) -> Path:
     """Write an animation of ``traj`` (see :meth:`pfaff.Trajectory.animate`)."""
     fmt = check_path(path)
@@ -218,7 +222,8 @@ def animate(
     data = sample_frames(traj, n_frames)
     from matplotlib.animation import FFMpegWriter, FuncAnimation
 
-    scene = _Scene(geo, data, pairs, size, dpi, title or geo.name, blit=fmt == "gif")
+    solids = solids_of(geo, solid, _extent(geo, data))
+    scene = _Scene(geo, data, pairs, size, dpi, title or geo.name, solids, blit=fmt == "gif")
     try:
         anim = FuncAnimation(
             scene.fig, scene.update, frames=len(data.t), repeat=False, cache_frame_data=False
@@ -262,7 +267,16 @@ def _decimals(ts: np.ndarray) -> int:
     return int(min(9, max(2, math.ceil(-math.log10(dt)) + 1))) if dt > 0 else 3
 
 
-def _limits(geo: Any, data: Frames, pairs: list) -> tuple[np.ndarray, np.ndarray, float]:
+def _extent(geo: Any, data: Frames) -> float:
+    """The largest side of the box holding every point and mass centre over the run."""
+    allp = np.concatenate([data.points.reshape(-1, geo.dim), data.centres.reshape(-1, geo.dim)])
+    allp = allp[np.isfinite(allp).all(axis=1)]
+    return float(np.ptp(allp, axis=0).max()) if len(allp) else 1.0
+
+
+def _limits(
+    geo: Any, data: Frames, pairs: list, solids: Solids
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Lower and upper corners of the drawing (a square or cube), and the length of body axes."""
     pts = [data.points.reshape(-1, geo.dim), data.centres.reshape(-1, geo.dim)]
     if any(-1 in p for p in pairs):
@@ -275,7 +289,8 @@ def _limits(geo: Any, data: Frames, pairs: list) -> tuple[np.ndarray, np.ndarray
     extent = float((hi - lo).max())
     axis = 0.2 * extent if extent > 0 else 1.0
     if len(geo.body_names):
-        lo, hi = lo - axis, hi + axis
+        reach = max(axis, float(solids.half.max()))
+        lo, hi = lo - reach, hi + reach
     mid, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 1e-9) * 1.1
     return mid - half, mid + half, axis
 
@@ -288,7 +303,15 @@ class _Scene:
     """
 
     def __init__(
-        self, geo: Any, data: Frames, pairs: list, size: float, dpi: int, title: str, blit: bool
+        self,
+        geo: Any,
+        data: Frames,
+        pairs: list,
+        size: float,
+        dpi: int,
+        title: str,
+        solids: Solids | None = None,
+        blit: bool = False,
     ) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
@@ -301,7 +324,10 @@ class _Scene:
         self.fig = Figure(figsize=(size, size), dpi=dpi, facecolor="white")
         Canvas(self.fig)
         self.title = title
-        self.lo, self.hi, self.axis_len = _limits(geo, data, pairs)
+        self.solids = (
+            solids if solids is not None else solids_of(geo, "ellipsoid", _extent(geo, data))
+        )
+        self.lo, self.hi, self.axis_len = _limits(geo, data, pairs, self.solids)
         self.ax = self._axes()
         self.moving: list = []
         self._artists(pairs)
@@ -353,6 +379,7 @@ class _Scene:
             ax.plot(*([0.0] for _ in range(d)), marker="o", ms=4, color="k", linestyle="none")
         self.ia = np.array([a for a, _ in pairs], dtype=np.int64)
         self.ib = np.array([b for _, b in pairs], dtype=np.int64)
+        self.bodies = self._solid_collection()
         self.lines = self._collection(colors="0.25", linewidths=1.5)
         self.axes = [
             self._collection(colors=AXIS_COLOURS[a], linewidths=2)
@@ -391,11 +418,59 @@ class _Scene:
             segs.append(np.stack([c, pts[start]])[None])
         _set(self.centres, np.array(centres).reshape(-1, d), d)
         self.lines.set_segments(np.concatenate(segs))
+        self._update_solids(i)
         for a, coll in enumerate(self.axes):
             tips = data.centres[i] + self.axis_len * data.dcm[i, :, :d, a]
             coll.set_segments(np.stack([data.centres[i], tips], axis=1))
         self.label.set_text(f"{self.title}\nt = {data.t[i]:.{self.decimals}f}")
         return self.moving
+
+    def _solid_collection(self) -> Any:
+        """The bodies' solids: shaded faces in 3-D, outlines filled in 2-D."""
+        if not len(self.geo.body_names):
+            return None
+        from matplotlib.colors import to_rgb
+
+        B = len(self.geo.body_names)
+        self.body_colours = np.array(
+            [to_rgb(SOLID_COLOURS[k % len(SOLID_COLOURS)]) for k in range(B)]
+        )
+        if self.d == 3:
+            from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+            self.unit = [unit_faces(k) for k in self.solids.kinds]
+            coll = Poly3DCollection([np.zeros((3, 3))], edgecolors="none")
+            self.ax.add_collection3d(coll)
+        else:
+            from matplotlib.collections import PolyCollection
+
+            coll = PolyCollection([np.zeros((3, 2))], edgecolors="0.2", linewidths=0.6, alpha=0.85)
+            coll.set_facecolor(self.body_colours)
+            self.ax.add_collection(coll)
+        self.moving.append(coll)
+        return coll
+
+    def _update_solids(self, i: int) -> None:
+        if self.bodies is None:
+            return
+        world = self.solids.world(self.data.dcm[i])  # (B, 3, 3): semi-axis vectors
+        centres = self.data.centres[i]
+        if self.d == 3:
+            faces = [c + u @ w.T for c, u, w in zip(centres, self.unit, world, strict=True)]
+            colours = [
+                np.broadcast_to(col, (len(u), 3))
+                for col, u in zip(self.body_colours, self.unit, strict=True)
+            ]
+            allf = self.faces = np.concatenate(faces)
+            self.bodies.set_verts(allf)
+            self.bodies.set_facecolor(shaded(allf, np.concatenate(colours)))
+        else:
+            polys = []
+            for c, kind, w in zip(centres, self.solids.kinds, world, strict=True):
+                inplane = w[:2]  # x, y of the three semi-axis vectors
+                keep = np.argsort(np.linalg.norm(inplane, axis=0))[-2:]
+                polys.append(c + outline(kind, inplane[:, np.sort(keep)]))
+            self.bodies.set_verts(polys)
 
     def draw_moving(self) -> None:
         """Draw the moving artists over the canvas (after the background is restored)."""

@@ -347,10 +347,11 @@ class Trajectory:
         size: float = 4.0,
         dpi: int = 80,
         title: str | None = None,
+        solid: str = "ellipsoid",
     ) -> Path:
         """Write an animation of the motion: a GIF, or an MP4 where ffmpeg exists.
 
-        Particles and the lines between them, rigid bodies as their axes, a family of particles
+        Particles and the lines between them, rigid bodies as solids with their axes, a family of particles
         (the ring) as its points and centre; 2-D or 3-D as the model; the title shows t. What
         is drawn and the link rule: :mod:`pfaff.results.animation`, :mod:`pfaff.derive.geometry`.
 
@@ -373,6 +374,8 @@ class Trajectory:
             Pixels per inch (default 80: 320 × 320 pixels).
         title : str, optional
             Default: the system's name.
+        solid : {"ellipsoid", "box"}, optional
+            The solid drawn for a body of a given mass and inertia (:mod:`pfaff.results.solids`).
 
         Returns
         -------
@@ -398,8 +401,97 @@ class Trajectory:
         from pfaff.results.animation import animate
 
         return animate(
-            self, path, frames=frames, fps=fps, links=links, size=size, dpi=dpi, title=title
+            self,
+            path,
+            frames=frames,
+            fps=fps,
+            links=links,
+            size=size,
+            dpi=dpi,
+            title=title,
+            solid=solid,
         )
+
+    def to_html(
+        self,
+        path: str | Path,
+        *,
+        fps: float = 30.0,
+        solid: str = "ellipsoid",
+        up: str | None = None,
+        title: str | None = None,
+        max_frames: int = 3000,
+        arrows: dict | None = None,
+    ) -> Path:
+        """Write an interactive 3-D view of the motion: one HTML file that plays offline.
+
+        The page holds its scene and its WebGL2 renderer and fetches nothing. Particles are
+        spheres, rigid bodies (and ``System.add_shape`` shapes) solids of their mass and
+        inertia, links rods; drag to turn, wheel to zoom, play / pause / scrub / speed, the time
+        shown. What is drawn and how the data is kept small: :mod:`pfaff.results.viewer`.
+
+        Parameters
+        ----------
+        path : str or Path
+            Ends in ``.html``; written atomically.
+        fps : float, optional
+            Frames per second of the run's time kept in the file (default 30; the browser
+            interpolates between them), at most ``max_frames`` and about 3 MB of data.
+        solid : {"ellipsoid", "box"}, optional
+            The solid drawn for a body of a given inertia (:mod:`pfaff.results.solids`).
+        up : {"z", "y", "-z", "x", "-y", "-x"}, optional
+            The model's upward direction (default z in 3-D, y in 2-D; the bicycle's is -z).
+        title : str, optional
+            Default: the system's name.
+        max_frames : int, optional
+        arrows : dict, optional
+            Forces drawn as arrows (red, one scale): name → ``f(t, q, qd, multipliers)``
+            returning ``(at, force)``, each of the model's 2 or 3 components; e.g. a contact
+            force from its multipliers. Evaluated at the reported states.
+
+        Returns
+        -------
+        Path
+
+        Raises
+        ------
+        OptionError
+            A bad path or option.
+        StateError
+            The trajectory has no geometry or no states.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib, pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+        >>> traj = pfaff.simulate(model, [1.0], [0.0], (0.0, 1.0))
+        >>> page = traj.to_html(pathlib.Path(tempfile.mkdtemp()) / "swing.html")
+        >>> "<script src" in page.read_text()
+        False
+        """
+        from pfaff.results.viewer import to_html
+
+        return to_html(
+            self,
+            path,
+            fps=fps,
+            solid=solid,
+            up=up,
+            title=title,
+            max_frames=max_frames,
+            arrows=arrows,
+        )
+
+    def show(self, *, height: int = 480, **options: Any) -> Any:
+        """The interactive 3-D view for a notebook (Jupyter, VS Code): shown as a cell's value.
+
+        Returns a :class:`pfaff.results.viewer.Viewer` (its ``_repr_html_`` is the page of
+        :meth:`to_html` in a sandboxed frame ``height`` pixels high; ``.save(path)`` writes
+        it); ``options`` as for :meth:`to_html`.
+        """
+        from pfaff.results.viewer import show
+
+        return show(self, height=height, **options)
 
 
 def _netcdf_engine() -> str:
