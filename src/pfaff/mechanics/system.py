@@ -32,8 +32,8 @@ from pfaff.mechanics.contacts import ContactsMixin, ContactSpec
 from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
-from pfaff.mechanics.smooth import kinks
 from pfaff.mechanics.shapes import ShapesMixin
+from pfaff.mechanics.smooth import kinks
 
 PIECE_KINDS = (
     "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
