@@ -14,6 +14,7 @@ __all__ = [
     "InertiaError",
     "ModelError",
     "ModelTypeError",
+    "ModelWarning",
     "OptionError",
     "ParameterError",
     "PfaffError",
@@ -73,6 +74,11 @@ class RedundancyWarning(UserWarning):
     """Some constraints depend on one another: the motion is still determined, but on those rows
     only Aᵀλ is; pfaff reports the minimum-norm multipliers (``model.redundancy`` names the
     indeterminate directions)."""
+
+
+class ModelWarning(UserWarning):
+    """Something in a model is declared but has no effect: a parameter of a model file that no
+    expression uses (its value is ignored), an input that nothing uses. The message names it."""
 
 
 class SimulationError(PfaffError, RuntimeError):
