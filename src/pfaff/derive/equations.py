@@ -13,13 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
-from sympy.physics.vector.printing import vlatex
 
 from pfaff.core.errors import ConstraintError, PfaffError
 from pfaff.core.lazy import LazySeq
 from pfaff.core.symbols import accel, local_q, local_qd, speed
 from pfaff.derive.blocks import Block, Local
-from pfaff.derive.latexlist import EquationList
+from pfaff.derive.latexlist import EquationList, vlatex
 
 if TYPE_CHECKING:
     from pfaff.mechanics.system import SystemSpec

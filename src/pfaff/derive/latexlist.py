@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import Any
 
 import sympy as sp
-from sympy.physics.vector.printing import vlatex
 
 _TEXT_ESCAPES = {
     "\\": r"\textbackslash{}",
@@ -35,6 +34,14 @@ def latex_text(name: str) -> str:
     \text{no\_slip \& 100\%}
     """
     return r"\text{" + "".join(_TEXT_ESCAPES.get(c, c) for c in name) + "}"
+
+
+def vlatex(expr: Any) -> str:
+    """:func:`sympy.physics.vector.printing.vlatex` (dots for rates), imported when a list is
+    first shown: :mod:`sympy.physics` is not loaded with pfaff."""
+    from sympy.physics.vector.printing import vlatex as printer
+
+    return printer(expr)
 
 
 class LatexList(list):
