@@ -28,7 +28,7 @@ Rows (wall-clock seconds, the best of ``--repeat``):
     n = 8 the shipped model's machine code is lost in the pickle and every run fails) on a
     fresh local cluster of 2 workers, ``--ship-n``² runs of 2 s, in two modes: ``shipped`` (the
     default: the spec carries the compiled model pickled by
-    :func:`pfaff.sweep.driver.shipped_model`, each worker unpickles it) and ``derived in workers``
+    :func:`pfaff.sweep.source.shipped_model`, each worker unpickles it) and ``derived in workers``
     (``shipped_model`` patched to return None: each worker derives and compiles the file itself).
     ``cold s`` is the wall time of the first sweep on a fresh cluster (the driver's own derivation
     and compilation included for ``shipped``), ``warm s`` a second sweep on the same cluster; the
@@ -71,7 +71,7 @@ import numpy as np
 
 import pfaff
 
-driver = importlib.import_module("pfaff.sweep.driver")  # (pfaff.sweep is the function)
+source = importlib.import_module("pfaff.sweep.source")  # (pfaff.sweep is the function)
 
 PENDULUM = """
 [model]
@@ -270,7 +270,7 @@ def ship_table(links: int, n: int, repeat: int) -> None:
     mf = pfaff.load_model(path)
     coords = [f"th{i}" for i in range(1, links + 1)]
     vary = {"l": np.linspace(0.3, 0.6, n), "q0.th1": np.linspace(0.1, 0.8, n)}
-    real = driver.shipped_model
+    real = source.shipped_model
     blob = real(mf)  # fills the on-disk cache
     assert blob is not None
     base = SweepSpec(
@@ -306,7 +306,7 @@ def ship_table(links: int, n: int, repeat: int) -> None:
                 order = list(specs) if i % 2 == 0 else list(specs)[::-1]
                 for mode in order:
                     res = got.setdefault((cache, mode), {})
-                    driver.shipped_model = real if mode == "shipped" else (lambda _mf: None)
+                    source.shipped_model = real if mode == "shipped" else (lambda _mf: None)
                     try:
                         with cluster() as c, Client(c) as client:
                             client.wait_for_workers(2)
@@ -324,7 +324,7 @@ def ship_table(links: int, n: int, repeat: int) -> None:
                                 ref = ds.q.values if ref is None else ref
                                 np.testing.assert_allclose(ds.q.values, ref, rtol=0, atol=1e-12)
                     finally:
-                        driver.shipped_model = real
+                        source.shipped_model = real
     finally:
         if saved is None:
             os.environ.pop("PFAFF_CACHE", None)

@@ -100,7 +100,9 @@ def test_floats_keep_their_python_value_and_integers_stay_exact() -> None:
 
 def test_dot_is_the_time_derivative_of_a_coordinate() -> None:
     assert parse("dot(theta1)") == theta1.diff(t)
-    assert pfaff.core.symbols.t is dynamicsymbols._t
+    # SymPy's time symbol, made without importing sympy.physics: equal (and hashing alike)
+    assert pfaff.core.symbols.t == dynamicsymbols._t
+    assert hash(pfaff.core.symbols.t) == hash(dynamicsymbols._t)
     refused("dot(theta1)", "dot\\(\\) is not allowed", allow_dot=False)
     refused("dot(m1)", "'m1' is not a coordinate")
     refused("dot(1+2)", "dot\\(\\) takes the name of a coordinate, not '1\\+2'")

@@ -53,4 +53,4 @@ def test_coordinates_syntax() -> None:
     qs = pfaff.coordinates("x theta1:65")
     assert len(qs) == 65 and str(qs[-1]) == "theta64(t)"
     assert all(q.args == (t,) for q in qs)
-    assert pfaff.t is sp.physics.vector.dynamicsymbols._t
+    assert pfaff.t == sp.physics.vector.dynamicsymbols._t  # equal: sympy.physics not imported

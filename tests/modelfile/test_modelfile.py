@@ -26,11 +26,16 @@ def test_issue_example_matches_the_python_api() -> None:
     np.testing.assert_array_equal(mf.q0, [1.0, 0.0])
     assert mf.simulate == {"t_end": 10.0, "method": "projection"}
     th1, th2 = pfaff.coordinates("theta1 theta2")
-    m1, m2, l1, l2, c = sp.symbols("m1 m2 l1 l2 c")
+    m1, m2, l1, l2, g, c = sp.symbols("m1 m2 l1 l2 g c")
     s = pfaff.System([th1, th2])
-    s.add_particle(m1, [l1 * sp.sin(th1), -l1 * sp.cos(th1)])
-    s.add_particle(m2, [l1 * sp.sin(th1) + l2 * sp.sin(th2), -l1 * sp.cos(th1) - l2 * sp.cos(th2)])
-    s.add_generalized_force(th2, -c * (th2.diff(pfaff.t) - th1.diff(pfaff.t)))
+    r1 = [l1 * sp.sin(th1), -l1 * sp.cos(th1)]
+    r2 = [l1 * sp.sin(th1) + l2 * sp.sin(th2), -l1 * sp.cos(th1) - l2 * sp.cos(th2)]
+    s.add_particle(m1, r1)
+    s.add_particle(m2, r2)
+    s.add_potential_energy(g * (m1 * r1[1] + m2 * r2[1]))  # gravity along −y
+    relative = c * (th2.diff(pfaff.t) - th1.diff(pfaff.t))  # the damper's torque on each link
+    s.add_generalized_force(th1, relative)
+    s.add_generalized_force(th2, -relative)
     ref, got = s.equations(), mf.system.equations()
     assert sp.simplify(ref.mass_matrix - got.mass_matrix) == sp.zeros(2, 2)
     assert sp.simplify(ref.forcing - got.forcing) == sp.zeros(2, 1)

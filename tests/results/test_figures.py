@@ -111,7 +111,7 @@ def test_returned_figure_is_not_left_open_in_pyplot(
     path = tmp_path / "run.svg"
     again = pendulum_run.plot(path)
     assert plt.get_fignums() == []
-    assert type(fig).__name__ == "Figure" and again is not fig
+    assert type(fig).__name__ == "NotebookFigure" and again is not fig
     assert path.read_text().lstrip().startswith("<?xml")
 
 

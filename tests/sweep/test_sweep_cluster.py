@@ -130,3 +130,14 @@ def test_a_run_that_kills_its_worker_is_a_failed_run(pendulum):
     assert ds.status.values.tolist() == ["success", "success", "failed", "success"]
     assert "worker process died" in str(ds.message.sel(L=1.5).values)
     assert np.isfinite(ds.q.sel(L=2.0)).all() and np.isnan(ds.q.sel(L=1.5)).all()
+
+
+def test_a_compiled_model_on_a_cluster(cluster):
+    """The model pickled once and shipped: the same runs as in this process, bit for bit."""
+    model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    kw = {"q0": [1.0, 0.0], "t_span": (0.0, 2.0), "samples": 21}
+    vary = {"g": [9.81, 1.62], "qd0.y": [0.0, 0.5]}
+    ref = pfaff.sweep(model, vary, scheduler="synchronous", **kw)
+    ds = pfaff.sweep(model, vary, scheduler=cluster.scheduler_address, progress=False, **kw)
+    assert (ref.status == "success").all()
+    same_runs(ds, ref)

@@ -28,15 +28,18 @@ For a ``LagrangesMethod`` the rows are the same (holonomic first, in SymPy's ord
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
-from sympy.physics import mechanics as me
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError, ModelTypeError
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.symbols import t
+
+if TYPE_CHECKING:
+    from sympy.physics import mechanics as me
 
 
 @checked_keywords
@@ -76,6 +79,8 @@ def from_sympy(obj: object, parameters: Mapping | Sequence | None = None) -> Sys
     >>> pfaff.from_sympy(lm).equations().forcing
     Matrix([[-k*q(t)]])
     """
+    from sympy.physics import mechanics as me  # loaded already where obj was made
+
     if isinstance(obj, me.LagrangesMethod):
         system = _from_lagrange(obj)
     elif isinstance(obj, me.KanesMethod):
@@ -207,6 +212,8 @@ def _speeds(name: str, kdes: list, q: list, u: list, qd: list) -> dict:
 
 def _generalized_forces(loads, frame, qd: list, u_of_qd: dict) -> list:
     """Q_j = Σ F · ∂v_P/∂q̇_j + Σ τ · ∂ω_B/∂q̇_j, every u replaced by u(q, q̇)."""
+    from sympy.physics import mechanics as me
+
     Q = [sp.S.Zero] * len(qd)
     for load in loads:
         try:

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from base64 import b64encode
 from collections.abc import Callable
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import sympy as sp
 
+from pfaff.core.display import number, summary_html
 from pfaff.core.errors import ModelError, ModelTypeError
 from pfaff.core.keywords import checked_keywords
 from pfaff.derive.linearize import linearize
@@ -34,6 +36,42 @@ class RootLocus(NamedTuple):
     values: np.ndarray
     eigenvalues: np.ndarray
     figure: Figure
+
+    def stable_ranges(self, tol: float = 1e-9) -> list[tuple[float, float]]:
+        """The runs of consecutive values at which every nonzero eigenvalue has a negative
+        real part (eigenvalues below ``tol`` times the largest |s| count as zero: ignorable
+        coordinates), as (first, last) value pairs.
+
+        Examples
+        --------
+        >>> eig = np.array([[0.0, 1.0], [0.0, -1.0], [0.0, -2.0], [0.0, 3.0]])
+        >>> RootLocus(np.arange(4.0), eig, None).stable_ranges()
+        [(1.0, 2.0)]
+        """
+        w = np.asarray(self.eigenvalues, dtype=complex).reshape(len(self.values), -1)
+        scale = max(float(np.abs(w).max(initial=0.0)), 1.0)
+        stable = [bool(np.all(row.real[np.abs(row) > tol * scale] < 0)) for row in w]
+        out: list[tuple[float, float]] = []
+        for i, ok in enumerate(stable):
+            if ok and (i == 0 or not stable[i - 1]):
+                out.append((float(self.values[i]), float(self.values[i])))
+            elif ok:
+                out[-1] = (out[-1][0], float(self.values[i]))
+        return out
+
+    def _repr_html_(self) -> str:
+        """The parameter's range, where the motion is stable, and the figure."""
+        values = np.asarray(self.values, dtype=float)
+        name = self.figure.axes[-1].get_xlabel() if self.figure is not None else "parameter"
+        ranges = ", ".join(f"{number(a)} … {number(b)}" for a, b in self.stable_ranges())
+        rows = [
+            (name, f"{len(values)} values, {number(values.min())} … {number(values.max())}"),
+            ("states", str(np.shape(self.eigenvalues)[-1])),
+            ("stable (nonzero eigenvalues with Re s < 0)", ranges or "nowhere"),
+        ]
+        png = getattr(self.figure, "_repr_png_", lambda: None)()
+        img = "" if png is None else f'<img src="data:image/png;base64,{b64encode(png).decode()}"/>'
+        return summary_html("pfaff.RootLocus", rows, after=img)
 
 
 def _point(op_point: dict | Callable, name: str, value: float, params: set[str]) -> dict:

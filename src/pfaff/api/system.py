@@ -64,5 +64,5 @@ class System(SystemSpec):
     @checked_keywords
     def work(self, independent: object = None) -> list[ForceWork]:
         """Generalized force and virtual power of every applied force (see
-        :func:`pfaff.derive.work.work`)."""
+        :func:`pfaff.derive.work.work`): a list that Jupyter renders as LaTeX."""
         return _work(self, independent)

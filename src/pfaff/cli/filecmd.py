@@ -15,6 +15,7 @@ from pfaff.cli.signals import stage, verbose
 from pfaff.core.errors import RedundancyWarning
 
 RUN_FLAGS = ("t_end", "method", "rtol", "atol")
+REPORTED = 201  # equally spaced times `pfaff run` reports by default
 
 
 def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
@@ -23,29 +24,56 @@ def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
 
     eq = sub.add_parser("equations", help="derive and print the equations of a model file")
     eq.add_argument("model", metavar="MODEL.toml", help="the model file")
-    eq.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
-    eq.add_argument("--json", action="store_true", help="print one JSON object")
-    eq.add_argument("--max-bytes", type=whole(1), default=None, help="raise the 1 MB file-size cap")
+    eq.add_argument("--latex", action="store_true", help="print LaTeX (default: text)")
+    eq.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
+    eq.add_argument(
+        "--max-bytes", type=whole(1), default=None, help="the file-size cap (default: 1 MB)"
+    )
     common(eq)
     run = sub.add_parser("run", help="simulate a model file")
     run.add_argument("model", metavar="MODEL.toml", help="the model file")
-    run.add_argument("--t-end", type=positive, help="end time (default: the file's [simulate])")
-    run.add_argument("--method", choices=list(METHODS), help="integrator (default: the file's)")
-    run.add_argument("--rtol", type=positive, help="relative tolerance")
-    run.add_argument("--atol", type=positive, help="absolute tolerance")
-    run.add_argument("--samples", type=whole(2), help="report this many equally spaced times")
-    run.add_argument("--output", metavar="run.nc|run.csv", help="write the trajectory")
-    run.add_argument("--plot", metavar="run.png", help="write a figure of the run")
-    run.add_argument("--animate", metavar="run.gif", help="write an animation of the run")
+    run.add_argument(
+        "--t-end", type=positive, help="end time (default: the file's [simulate] t_end)"
+    )
+    run.add_argument(
+        "--method",
+        choices=list(METHODS),
+        help="integrator (default: the file's [simulate] method, else projection)",
+    )
+    run.add_argument(
+        "--rtol", type=positive, help="relative tolerance (default: the file's, else 1e-9)"
+    )
+    run.add_argument(
+        "--atol", type=positive, help="absolute tolerance (default: the file's, else 1e-11)"
+    )
+    times = run.add_mutually_exclusive_group()
+    times.add_argument(
+        "--samples",
+        type=whole(2),
+        help=f"report this many equally spaced times (default: the file's [simulate] samples, "
+        f"else {REPORTED}; fewer for a family whose states would not fit in 1 GiB)",
+    )
+    times.add_argument(
+        "--steps",
+        action="store_true",
+        help="report the integrator's own steps instead (default: equally spaced times)",
+    )
+    run.add_argument(
+        "--output", metavar="run.nc|run.csv", help="write the trajectory (default: not written)"
+    )
+    run.add_argument("--plot", metavar="run.png", help="write a figure of the run (default: none)")
+    run.add_argument(
+        "--animate", metavar="run.gif", help="write an animation of the run (default: none)"
+    )
     run.add_argument(
         "--frames",
         type=whole(1, "needs at least 1 frame, got {v}"),
         default=200,
-        help="animation frames (default 200)",
+        help="animation frames (default: 200)",
     )
-    run.add_argument("--json", action="store_true", help="print one JSON object")
+    run.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
     run.add_argument(
-        "--max-bytes", type=whole(1), default=None, help="raise the 1 MB file-size cap"
+        "--max-bytes", type=whole(1), default=None, help="the file-size cap (default: 1 MB)"
     )
     common(run)
 
@@ -180,7 +208,7 @@ def run_model(args: argparse.Namespace) -> int:
         warnings.simplefilter("ignore", RedundancyWarning)
         stage("deriving and compiling")
         model = mf.compile()
-        t_eval = np.linspace(0.0, t_end, samples) if samples else None
+        t_eval = None if args.steps else _times(model, t_end, samples)
         stage("simulating")
         if verbose():
             settings.setdefault("progress", True)
@@ -206,6 +234,16 @@ def run_model(args: argparse.Namespace) -> int:
     else:
         print(_run_text(rep))
     return 0 if traj.status == "success" else 3
+
+
+def _times(model: Any, t_end: float, samples: int | None) -> np.ndarray:
+    """The reported times: ``samples`` (the flag's or the file's) equally spaced, else
+    :data:`REPORTED`, fewer when a family's states would not fit (:func:`reported_times`)."""
+    from pfaff.cli.simdemo import reported_times
+
+    if samples is not None:
+        return np.linspace(0.0, t_end, samples)
+    return reported_times(t_end, model.n, model.m, REPORTED)
 
 
 def _run_report(mf: Any, traj: Any, wall: float) -> dict:

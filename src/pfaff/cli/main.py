@@ -177,7 +177,7 @@ def _debug_option(p: argparse.ArgumentParser, default: object = argparse.SUPPRES
         "--debug",
         action="store_true",
         default=default,
-        help="show the full traceback of an error",
+        help="show the full traceback of an error (default: a one-line message)",
     )
 
 

@@ -52,12 +52,26 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
 
 # A reported state costs 48 n bytes (q, q̇, q̈, λ, f, g): 401 of them at n = 2^20 would be 20 GB.
 TRAJECTORY_BYTES = 1 << 30
+STATE_BYTES = 48  # per coordinate or constraint row of one reported state
+
+
+def reported_times(t_end: float, n: int, m: int, most: int, least: int = 2) -> np.ndarray:
+    """``most`` equally spaced times over [0, t_end], fewer (never below ``least``) when their
+    states would take more than :data:`TRAJECTORY_BYTES` (48 (n + m) bytes each: a family of
+    millions of pieces).
+
+    Examples
+    --------
+    >>> len(reported_times(2.0, 5, 4, 201)), len(reported_times(1.0, 2**24, 2**24, 201))
+    (201, 2)
+    """
+    fit = TRAJECTORY_BYTES // (STATE_BYTES * max(n + m, 1))
+    return np.linspace(0.0, t_end, max(least, min(most, fit)))
 
 
 def _run(model: DynamicsModel, q0, qd0, opts: dict) -> tuple[Trajectory, float]:
     t0 = time.perf_counter()
-    fit = max(11, TRAJECTORY_BYTES // (48 * (model.n + model.m)))
-    t_eval = np.linspace(0.0, opts["t_end"], opts.get("points", min(401, fit)))
+    t_eval = reported_times(opts["t_end"], model.n, model.m, 401, least=11)
     traj = simulate(
         model, q0, qd0, (0.0, opts["t_end"]), method=opts["method"],
         rtol=opts["rtol"], atol=opts["atol"], t_eval=t_eval, progress=None,

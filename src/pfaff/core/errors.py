@@ -16,6 +16,7 @@ __all__ = [
     "LongRunWarning",
     "ModelError",
     "ModelTypeError",
+    "ModelWarning",
     "OptionError",
     "ParameterError",
     "PfaffError",
@@ -85,6 +86,11 @@ class RedundancyWarning(UserWarning):
 class LongRunWarning(UserWarning):
     """A run without ``t_eval`` whose recorded states, at its measured pace, would need more memory
     than is reasonable (the estimate is in the message): pass ``t_eval`` to bound it."""
+
+
+class ModelWarning(UserWarning):
+    """Something in a model is declared but has no effect: a parameter of a model file that no
+    expression uses (its value is ignored), an input that nothing uses. The message names it."""
 
 
 class SimulationError(PfaffError, RuntimeError):

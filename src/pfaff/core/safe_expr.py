@@ -47,7 +47,6 @@ from types import MappingProxyType
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
-from sympy.physics.vector import dynamicsymbols
 
 from pfaff.core.errors import ModelError
 from pfaff.core.expansion import EXPANDING, MAX_FUNCTION_TERMS, expanded_terms
@@ -81,7 +80,7 @@ MAX_NODES = 20_000
 MAX_NAME_LENGTH = 100
 """Longest name :func:`check_name` accepts."""
 
-_T: sp.Symbol = dynamicsymbols._t  # the time symbol, the same object as pfaff.core.symbols.t
+_T: sp.Symbol = sp.Symbol("t")  # the time symbol, equal to pfaff.core.symbols.t
 
 FUNCTIONS: Mapping[str, tuple[Callable[..., sp.Expr], int]] = MappingProxyType(
     {

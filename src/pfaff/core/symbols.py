@@ -1,24 +1,27 @@
 """Time, generalized coordinates and the internal placeholder symbols.
 
-Coordinates are SymPy ``dynamicsymbols``: undefined functions of :data:`t`, SymPy's own
-``dynamicsymbols._t``, so positions built with :mod:`sympy.physics.vector` frames and points can be
-handed to pfaff unchanged.
+Coordinates are what SymPy's ``dynamicsymbols`` makes: undefined functions of :data:`t`, the
+symbol ``Symbol("t")`` that is SymPy's ``dynamicsymbols._t``, so positions built with
+:mod:`sympy.physics.vector` frames and points can be handed to pfaff unchanged. They are made
+here with :func:`sympy.symbols` directly: importing :mod:`sympy.physics` would load its units
+package with pfaff (a tenth of ``import pfaff``).
 """
 
 from __future__ import annotations
 
 import re
+import sys
 from collections.abc import Iterable
 from functools import cache
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
-from sympy.physics.vector import dynamicsymbols
 
 from pfaff.core.errors import ModelError, ModelTypeError
 
-t: sp.Symbol = dynamicsymbols._t
-"""The time symbol, identical to ``sympy.physics.vector.dynamicsymbols._t``."""
+t: sp.Symbol = sp.Symbol("t")
+"""The time symbol, equal to ``sympy.physics.vector.dynamicsymbols._t`` (the plain symbol
+``t``, so expressions of either are the same expressions)."""
 
 
 _RESERVED = re.compile(r"_f?qd?[0-9]+")  # local placeholders of templates and fused code
@@ -46,6 +49,9 @@ def coordinates(names: str) -> sp.Function | tuple[sp.Function, ...]:
     True
     >>> len(pfaff.coordinates("x theta1:65"))
     65
+    >>> from sympy.physics.vector import dynamicsymbols
+    >>> pfaff.coordinates("x theta") == tuple(dynamicsymbols("x theta"))
+    True
     """
     if not isinstance(names, str):
         raise ModelTypeError(f"`names` must be a string such as 'x theta1:4', got {names!r}")
@@ -58,12 +64,28 @@ def coordinates(names: str) -> sp.Function | tuple[sp.Function, ...]:
             + (f": {', '.join(repr(b[:40]) for b in bad[:3])} not a name" if bad else "")
         )
     try:
-        made = dynamicsymbols(names)
+        made = sp.symbols(names, cls=sp.Function)  # as dynamicsymbols(names) does
     except ValueError as e:  # an empty range such as 'x5:3'
         raise ModelTypeError(f"`names`: {names!r} is not a valid range of names ({e})") from None
     if isinstance(made, list | tuple) and not made:
         raise ModelTypeError(f"`names`: {names!r} makes no coordinate (an empty range)")
-    return tuple(made) if isinstance(made, list | tuple) else made
+    return tuple(f(t) for f in made) if isinstance(made, list | tuple) else made(t)
+
+
+def is_physics_vector(obj: object, kind: str) -> bool:
+    """True when ``obj`` is a :mod:`sympy.physics.vector` object of class ``kind`` (``"Vector"``,
+    ``"ReferenceFrame"``). Such an object exists only once that package is imported, so pfaff
+    never imports it to ask (see the module docstring).
+
+    Examples
+    --------
+    >>> from sympy.physics.vector import ReferenceFrame
+    >>> N = ReferenceFrame("N")
+    >>> is_physics_vector(N.x, "Vector"), is_physics_vector(N, "Vector")
+    (True, False)
+    """
+    module = sys.modules.get("sympy.physics.vector")
+    return module is not None and isinstance(obj, getattr(module, kind))
 
 
 def is_coordinate_like(obj: object) -> bool:

@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
-from sympy.physics.vector.printing import vlatex
 
 from pfaff.core.errors import ConstraintError, PfaffError
 from pfaff.core.lazy import LazySeq
 from pfaff.core.symbols import accel, local_q, local_qd, speed
 from pfaff.derive.blocks import Block, Local
+from pfaff.derive.latexlist import EquationList, vlatex
 
 if TYPE_CHECKING:
     from pfaff.mechanics.system import SystemSpec
@@ -104,31 +104,6 @@ def _placeholder_calls(loc: Local) -> list[sp.Expr]:
         )
         loc.__dict__["_calls"] = cached
     return cached
-
-
-class EquationList(list[sp.Equality]):
-    """A list of :class:`sympy.Eq` that Jupyter renders as aligned LaTeX (dots for rates).
-
-    Equal to the plain list of the same equations; indexing and slicing work as on a list.
-
-    Examples
-    --------
-    >>> import sympy as sp
-    >>> x = sp.Symbol("x")
-    >>> eqs = EquationList([sp.Eq(x, 1)])
-    >>> eqs == [sp.Eq(x, 1)]
-    True
-    >>> print(eqs._repr_latex_())
-    $\\begin{aligned} x &= 1 \\end{aligned}$
-    """
-
-    MAX_SHOWN = 20  # equations rendered; a longer list ends in a vertical ellipsis
-
-    def _repr_latex_(self) -> str:
-        rows = [f"{vlatex(e.lhs)} &= {vlatex(e.rhs)}" for e in self[: self.MAX_SHOWN]]
-        if len(self) > self.MAX_SHOWN:
-            rows.append(rf"&\vdots \quad \text{{({len(self) - self.MAX_SHOWN} more)}}")
-        return "$\\begin{aligned} " + r" \\ ".join(rows) + " \\end{aligned}$"
 
 
 class Derivation:

@@ -16,6 +16,7 @@ from sympy.core.function import AppliedUndef
 
 from pfaff.core.errors import ModelTypeError, PfaffError
 from pfaff.core.symbols import as_expr, t
+from pfaff.derive.latexlist import WorkList
 from pfaff.derive.reduce import tidy
 from pfaff.derive.templates import derive
 from pfaff.mechanics.system import SystemSpec
@@ -131,7 +132,7 @@ def _null_space(A: sp.Matrix, coords: tuple, independent: list | None) -> tuple[
     return N, tuple(coords[i].diff(t) for i in ind)
 
 
-def work(system: SystemSpec, independent: list | None = None) -> list[ForceWork]:
+def work(system: SystemSpec, independent: list | None = None) -> WorkList:
     """Generalized force and virtual power of every applied force of ``system``.
 
     Parameters
@@ -140,6 +141,12 @@ def work(system: SystemSpec, independent: list | None = None) -> list[ForceWork]
         At most 60 coordinates (the admissible velocities come from a symbolic null space of A).
     independent : sequence of Function, optional
         Coordinates whose speeds parametrize the admissible motions (default: SymPy's null space).
+
+    Returns
+    -------
+    WorkList
+        One :class:`ForceWork` per applied force, in the order they were added: a ``list``
+        that Jupyter renders as LaTeX (:class:`pfaff.derive.latexlist.WorkList`).
 
     Examples
     --------
@@ -163,7 +170,7 @@ def work(system: SystemSpec, independent: list | None = None) -> list[ForceWork]
     coords = eom.coordinates
     N, speeds = _null_space(sp.Matrix(eom.constraint_matrix), coords, independent)
     u = sp.Matrix(speeds)
-    out = []
+    out = WorkList()
     for p in system.pieces:
         if p.kind not in ("force", "genforce", "torque", "dissipation"):
             continue

@@ -15,18 +15,29 @@ Small fused models run DOP853 on Python floats (:mod:`pfaff.integrate.fastrk`), 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy.integrate import DOP853, RK23, RK45, OdeSolver
 
 from pfaff.core.errors import OptionError
-from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
 from pfaff.integrate.stepper import Power, Stepper, StepperOptions
 from pfaff.integrate.work import checked_sum, dense_work
 from pfaff.numeric.projection import Projector
 from pfaff.numeric.protocol import DynamicsModel, OdeFunction
 
-RK_METHODS = {"DOP853": DOP853, "RK45": RK45, "RK23": RK23}
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolver
+
+RK_METHODS = ("DOP853", "RK45", "RK23")  # SciPy's explicit Runge–Kutta solvers, by name
 UNREACHED = 1e6  # a projected state this many times constraint_tol off the constraints: failed
+
+
+def rk_solver(name: str) -> type[OdeSolver]:
+    """SciPy's solver class of that name; ``scipy.integrate`` is imported here, on the first
+    run, not with pfaff (it costs a third of pfaff's import time, with ``scipy.optimize``)."""
+    import scipy.integrate
+
+    return getattr(scipy.integrate, name)
 
 
 class _RKStepper(Stepper):
@@ -45,12 +56,16 @@ class _RKStepper(Stepper):
         kw = opts.step_sizes()
         on_lists = fun.on_lists
         self.solver: OdeSolver
+        # fastrk subclasses scipy.integrate.OdeSolver: imported with SciPy's solvers, here
+        from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
+
         if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
             self.solver = FloatDOP853(
                 fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, list_fun=on_lists, **kw
             )
         else:
-            self.solver = RK_METHODS[name](fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, **kw)
+            cls = rk_solver(name)
+            self.solver = cls(fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, **kw)
         self.fun = fun
         self.n = len(y0) // 2
         self.stats = {"steps": 0, "rejected": 0, "nfev": 0}

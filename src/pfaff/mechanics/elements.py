@@ -9,15 +9,16 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import sympy as sp
-from sympy.physics.vector import ReferenceFrame
 
 from pfaff.core.errors import ModelError, ModelTypeError
 from pfaff.core.keywords import checked_keywords
-from pfaff.core.symbols import as_expr, t
+from pfaff.core.symbols import as_expr, is_physics_vector, t
 from pfaff.mechanics.attitude import Attitude, PlanarAngle, Rotation
 from pfaff.mechanics.bodies import Body, between, check_rotation, inertia_matrix, torque_exprs
 
 if TYPE_CHECKING:
+    from sympy.physics.vector import ReferenceFrame
+
     from pfaff.mechanics.system import SystemSpec
 
 
@@ -109,7 +110,7 @@ class ElementsMixin:
 
     def _attitude(self: SystemSpec, attitude: object, frame: object, what: str) -> Attitude:
         """The attitude set of a body; a ReferenceFrame B becomes Rotation(N.dcm(B))."""
-        if isinstance(attitude, ReferenceFrame):
+        if is_physics_vector(attitude, "ReferenceFrame"):
             dcm, source = self._frame_dcm(attitude, frame, what)
             return Rotation(dcm, source=source)
         if not isinstance(attitude, Attitude):

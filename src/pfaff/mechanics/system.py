@@ -10,11 +10,11 @@ ring of N identical particles does not grow with N.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
-from sympy.physics.vector import Vector
 
 from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError
 from pfaff.core.keywords import checked_keywords
@@ -22,6 +22,7 @@ from pfaff.core.lazy import LazySeq, NumberedNames, concat
 from pfaff.core.symbols import (
     as_expr,
     is_coordinate_like,
+    is_physics_vector,
     local_q,
     local_qd,
     speed,
@@ -34,6 +35,9 @@ from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
 from pfaff.mechanics.shapes import ShapesMixin
 from pfaff.mechanics.smooth import kinks
+
+if TYPE_CHECKING:
+    from sympy.physics.vector import Vector
 
 PIECE_KINDS = (
     "particle", "kinetic", "potential", "force", "genforce", "torque", "dissipation",
@@ -414,7 +418,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin, ShapesMixin):
         return piece
 
     def _vector(self, value: object, what: str, frame: object) -> tuple[sp.Expr, ...]:
-        if isinstance(value, Vector):
+        if is_physics_vector(value, "Vector"):
             frame = frame if frame is not None else self.frame
             if frame is None:
                 frame = self._only_fixed_frame(value, what)

@@ -16,6 +16,10 @@ The format (see ``examples/`` and the README)::
     potential = "..."
     dissipation = "..."        # a Rayleigh function R(q, dot(q)): Q = -dR/d(dot q)
 
+    [[inputs]]                 # a named expression of t, q, dot(q) and the parameters,
+    name = "u"                 # usable in every expression after it (a drive, a feedback law)
+    value = "F0*sin(w*t) - k*dot(x)"
+
     [[families]]               # indexed coordinates theta0 ... theta{n-1} (first = 0)
     name = "theta"
     n = 8
@@ -44,6 +48,11 @@ The format (see ``examples/`` and the README)::
 A piece over a family has ``over = "k"`` (every k its references allow) or ``over = ["k", first,
 last]``; its expressions write members as ``theta[k]``, ``theta[k+1]``. ``dot(q)`` is the rate of
 coordinate q, ``t`` the time.
+
+An input's value is substituted where the input is used, so a file's input is part of the
+equations (``linearize`` sees the closed loop; for an open input, declare it in Python with
+:meth:`pfaff.System.add_input`). A declared parameter or input that nothing uses is reported as a
+:class:`pfaff.ModelWarning` naming it (its value would be ignored).
 """
 
 from __future__ import annotations
@@ -51,6 +60,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+import warnings
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -60,7 +70,7 @@ import numpy as np
 import sympy as sp
 
 from pfaff.api.system import System
-from pfaff.core.errors import ModelError
+from pfaff.core.errors import ModelError, ModelWarning, ParameterError
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.safe_expr import (
     ExpressionError,
@@ -74,7 +84,7 @@ from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 
 MAX_BYTES = 1 << 20  # 1 MB: a larger file is refused unless ``max_bytes`` is raised
 SECTIONS = {
-    "model", "families", "particles", "bodies", "forces", "generalized_forces", "torques",
+    "model", "inputs", "families", "particles", "bodies", "forces", "generalized_forces", "torques",
     "springs", "dampers", "constraints", "contacts", "events", "initial", "simulate",
 }  # fmt: skip
 SIMULATE_KEYS = {
@@ -106,6 +116,8 @@ class ModelFile:
         ``[simulate]``: run settings (``t_end``, ``method``, tolerances, ...).
     constraint_names : list of str
         In the file's order (the order of the multipliers).
+    inputs : dict of str to Expr
+        ``[[inputs]]``: each input's value, in the file's order (substituted where it is used).
     """
 
     path: Path
@@ -116,13 +128,45 @@ class ModelFile:
     qd0: np.ndarray
     simulate: dict[str, Any] = field(default_factory=dict)
     constraint_names: list[str] = field(default_factory=list)
+    inputs: dict[str, sp.Expr] = field(default_factory=dict)
 
     def compile(self, **parameters: float) -> Any:
-        """The numeric model with the file's parameter values (``parameters`` override them);
-        parameters the equations do not use (declared but unused) are left out."""
+        """The numeric model with the file's parameter values (``parameters`` override them).
+
+        Raises
+        ------
+        ParameterError
+            An override names no parameter of the file.
+
+        Warns
+        -----
+        ModelWarning
+            Naming each declared parameter that no expression of the model uses (its value is
+            left out: it would change nothing).
+        """
+        unknown = sorted(set(parameters) - set(self.parameters))
+        if unknown:
+            raise ParameterError(
+                f"file {self.path}: {', '.join(f'`{k}`' for k in unknown)} is not a parameter "
+                f"of the file (its parameters: {', '.join(self.parameters) or 'none'})"
+            )
         values = {**self.parameters, **parameters}
         used = {s.name for s in self.system.parameters}
+        warn_unused(self.path, [k for k in values if k not in used], stacklevel=2)
         return self.system.equations().compile({k: v for k, v in values.items() if k in used})
+
+
+def warn_unused(path: Path, names: list[str], what: str = "parameter", stacklevel: int = 2) -> None:
+    """A :class:`ModelWarning` naming the declared ``names`` that no expression uses."""
+    if names:
+        listed, many = ", ".join(f"`{n}`" for n in names), len(names) > 1
+        warnings.warn(
+            f"file {path}: {what}{'s' if many else ''} {listed} declared but not used by any "
+            f"expression of the model: {'their values change' if many else 'its value changes'} "
+            "nothing",
+            ModelWarning,
+            stacklevel=stacklevel + 1,
+        )
 
 
 @checked_keywords
@@ -202,11 +246,13 @@ class _Names(Mapping):
     """The names an expression may use: the declared ones, and family members (``theta5``)
     resolved on demand (a family of 2^24 members is not listed)."""
 
-    def __init__(self, declared: dict, families: dict) -> None:
+    def __init__(self, declared: dict, families: dict, seen: set[str] | None = None) -> None:
         self.declared, self.families = declared, families
+        self.seen = set() if seen is None else seen  # the names looked up (what is used)
 
     def __getitem__(self, key: str) -> sp.Expr:
         if key in self.declared:
+            self.seen.add(key)
             return self.declared[key]
         for name, fam in self.families.items():
             rest = key[len(name) :]
@@ -218,6 +264,10 @@ class _Names(Mapping):
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.declared)
+
+    def items(self) -> Any:
+        """The declared names and values (listing them is not using them: nothing is seen)."""
+        return self.declared.items()
 
     def __len__(self) -> int:
         return len(self.declared)
@@ -232,6 +282,8 @@ class _Loader:
         self.families: dict[str, Any] = {}
         self.bodies: dict[str, Any] = {}
         self.constraints: list[str] = []
+        self.inputs: dict[str, sp.Expr] = {}
+        self.seen: set[str] = set()  # names the model's expressions use (not the inputs' own)
 
     def where(self, key: str) -> str:
         return f"file {self.path}, key {key}"
@@ -276,7 +328,7 @@ class _Loader:
             raise self.fail(
                 key, f"must be an expression (a string) or a number, got {type(value).__name__}"
             )
-        names: Mapping = _Names(dict(self.names), self.families)
+        names: Mapping = _Names(dict(self.names), self.families, self.seen)
         subs = None
         if index is not None:
             names.declared[index.name] = index
@@ -336,6 +388,7 @@ class _Loader:
             raise self.fail("model.name", "must be a string")
         system = self.system(model, name)
         values = self.parameters(model)
+        uses = self.inputs_()
         self.energies(system, model)
         self.particles(system)
         self.bodies_(system)
@@ -348,9 +401,49 @@ class _Loader:
         if undeclared:  # cannot happen through the parser; a guard against a future change
             raise self.fail("model.parameters", f"no value for {', '.join(undeclared)}")
         q0, qd0 = self.initial(system)
+        self.unused(uses, values, used)
         return ModelFile(
-            self.path, name, system, values, q0, qd0, self.simulate(), list(self.constraints)
+            self.path,
+            name,
+            system,
+            values,
+            q0,
+            qd0,
+            self.simulate(),
+            list(self.constraints),
+            dict(self.inputs),
         )
+
+    def inputs_(self) -> dict[str, set[str]]:
+        """``[[inputs]]``: each a name for its value, an expression of t, q, dot(q), the
+        parameters and the inputs before it; the names each value uses."""
+        uses = {}
+        for i, tab in enumerate(self.tables("inputs")):
+            key = f"inputs[{i}]"
+            self.keys(key, tab, {"name", "value"}, {"name", "value"})
+            name = tab["name"]
+            check_name(name, self.where(f"{key}.name"))
+            if name in self.names or name in self.families:
+                raise self.fail(
+                    f"{key}.name", f"`{name}` is already a coordinate, parameter, input or family"
+                )
+            outer, self.seen = self.seen, set()
+            self.inputs[name] = self.names[name] = self.expr(f"{key}.value", tab["value"])
+            self.seen, uses[name] = outer, self.seen
+        return uses
+
+    def unused(self, uses: dict[str, set[str]], values: dict, used: set[str]) -> None:
+        """Warn of the inputs and parameters that nothing uses (an input counts where the
+        model's expressions use it, or an input they use does)."""
+        live = {n for n in uses if n in self.seen}
+        todo = list(live)
+        while todo:
+            for dep in uses[todo.pop()] & set(uses):
+                if dep not in live:
+                    live.add(dep)
+                    todo.append(dep)
+        warn_unused(self.path, [n for n in uses if n not in live], "input", stacklevel=4)
+        warn_unused(self.path, [k for k in values if k not in used], stacklevel=4)
 
     def system(self, model: dict, name: str) -> System:
         coords = model.get("coordinates", [])

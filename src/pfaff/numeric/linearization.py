@@ -23,6 +23,7 @@ numeric work afterwards, for any parameter values and input values.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -30,6 +31,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import scipy.linalg
 
+from pfaff.core.display import complex_number, number, summary_html, table_html
 from pfaff.core.errors import (
     ConstraintError,
     PfaffError,
@@ -285,6 +287,18 @@ def _numeric(a: Any, what: str) -> np.ndarray:
         ) from e
 
 
+def state_name(state: object) -> str:
+    """A state as its CSV column is named: ``theta`` for θ(t), ``theta_dot`` for its rate.
+
+    Examples
+    --------
+    >>> state_name("Derivative(theta(t), t)"), state_name("x(t)"), state_name("u")
+    ('theta_dot', 'x', 'u')
+    """
+    text = re.sub(r"Derivative\((\w+)\(t\), t\)", r"\1_dot", str(state))
+    return re.sub(r"(\w+)\(t\)", r"\1", text)
+
+
 def _sorted(w: np.ndarray, v: np.ndarray | None = None):
     order = np.lexsort((w.imag, w.real))
     return w[order] if v is None else (w[order], v[:, order])
@@ -371,6 +385,34 @@ class Linearization:
         keep = complement(A.shape[0], self.ignorable())
         w = np.linalg.eigvals(A[np.ix_(keep, keep)])
         return bool(np.all(w.real < 0))
+
+    MAX_SHOWN = 24  # eigenvalues listed in a notebook
+
+    def _repr_html_(self) -> str:
+        """States, inputs, stability and the eigenvalues with their frequencies and damping
+        ratios (a symbolic linearization lists its states only)."""
+        rows = [
+            ("states", ", ".join(map(state_name, self.states)) or "none"),
+            ("inputs", ", ".join(map(state_name, self.inputs)) or "none"),
+        ]
+        title = f"pfaff.Linearization: {len(self.states)} states, {len(self.inputs)} inputs"
+        if not self.numeric:
+            rows.append(("eigenvalues", "symbolic: give every parameter a value for numbers"))
+            return summary_html(title, rows)
+        try:
+            w, (freq, zeta, _) = self.eigenvalues(), self.modes()
+            rows.append(("stable", "yes" if self.is_stable() else "no"))
+        except (np.linalg.LinAlgError, PfaffError) as e:  # a non-finite A
+            rows.append(("eigenvalues", f"not computed ({e})"))
+            return summary_html(title, rows)
+        shown = range(min(len(w), self.MAX_SHOWN))
+        table = table_html(
+            ["eigenvalue s (1/s)", "|s| (rad/s)", "damping ratio"],
+            [[complex_number(w[i]), number(freq[i]), number(zeta[i])] for i in shown],
+        )
+        if len(w) > self.MAX_SHOWN:
+            table += f"<p>(first {self.MAX_SHOWN} of {len(w)})</p>"
+        return summary_html(title, rows, after=table)
 
     def __repr__(self) -> str:
         kind = "numeric" if self.numeric else "symbolic"

@@ -16,6 +16,7 @@ infinity is handed to ``np.sin``/``np.cos`` instead.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import mpmath
@@ -33,8 +34,10 @@ _H2 = (_H - _H1) + _TWO_PI_LO / TABLE  # the rest of h = 2π/TABLE, to 1e-26 abs
 _KMAX = LIMIT * _INV_H
 
 
+@functools.cache
 def _table() -> tuple[np.ndarray, np.ndarray]:
-    """sin(jh), cos(jh) correctly rounded (NumPy's would carry the rounding of j h: 1e-16)."""
+    """sin(jh), cos(jh) correctly rounded (NumPy's would carry the rounding of j h: 1e-16);
+    made on first use (2048 values in mpmath: a tenth of a second that ``import pfaff`` saves)."""
     with mpmath.workdps(40):
         h = 2 * mpmath.pi / TABLE
         return (
@@ -43,7 +46,6 @@ def _table() -> tuple[np.ndarray, np.ndarray]:
         )
 
 
-_SIN, _COS = _table()
 # sin r = r + r z (S3 + z S5), cos r = 1 + z (C2 + z C4), z = r²: truncation below 2e-19
 _S3, _S5 = -1.0 / 6.0, 1.0 / 120.0
 _C2, _C4 = -0.5, 1.0 / 24.0
@@ -118,8 +120,9 @@ def _block(x: np.ndarray, s: np.ndarray, c: np.ndarray, w: _Work) -> None:
     np.copyto(j, k, casting="unsafe")
     np.bitwise_and(j, TABLE - 1, out=j)  # j mod TABLE, also for negative j (two's complement)
     ts, tc = w.ts[:n], w.tc[:n]
-    _SIN.take(j, out=ts, mode="clip")  # j is in range: "clip" skips the bounds check
-    _COS.take(j, out=tc, mode="clip")
+    sin_table, cos_table = _table()
+    sin_table.take(j, out=ts, mode="clip")  # j is in range: "clip" skips the bounds check
+    cos_table.take(j, out=tc, mode="clip")
     np.multiply(r, r, out=z)
     np.multiply(z, _S5, out=a)  # a = sin r - r = r z (S3 + z S5)
     np.add(a, _S3, out=a)

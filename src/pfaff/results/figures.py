@@ -1,8 +1,8 @@
 """Figures of a simulated trajectory: coordinates, multipliers, energy balance and residuals.
 
-Figures are made with :class:`matplotlib.figure.Figure`, not pyplot: nothing is left open in
-pyplot's list of figures (a returned figure is shown once in Jupyter) and the user's backend is
-never switched.
+Figures are made without pyplot, as :class:`pfaff.results.notebook.NotebookFigure` objects:
+nothing is left open in pyplot's list of figures, the user's backend is never switched, and
+Jupyter shows a returned figure exactly once (or not at all when it was written to a file).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from pfaff.results.notebook import NotebookFigure
     from pfaff.results.trajectory import Trajectory
 
 MAX_LINES = 8  # curves per panel; large systems show the first few
@@ -73,10 +74,14 @@ def figure_format(path: str | os.PathLike) -> str:
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, dpi: int = 110) -> None:
-    """Write ``fig`` to ``path`` atomically, in the format of its extension."""
+    """Write ``fig`` to ``path`` atomically, in the format of its extension; a
+    :class:`~pfaff.results.notebook.NotebookFigure` then shows in Jupyter as its file's name."""
+    from pfaff.results.notebook import mark_written
+
     fmt = figure_format(path)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=fmt)
+    mark_written(fig, path)
 
 
 def math_name(name: str) -> str:
@@ -152,7 +157,7 @@ def plot_trajectory(
     path: str | os.PathLike | None = None,
     *,
     units: Mapping[str, str] | None = None,
-) -> Figure:
+) -> NotebookFigure:
     """Coordinates q(t), multipliers λ(t), the energy balance and the constraint residuals.
 
     A panel with nothing to show is left out: a model without constraints has neither multipliers
@@ -170,9 +175,11 @@ def plot_trajectory(
 
     Returns
     -------
-    matplotlib.figure.Figure
-        Not registered with pyplot: displayed once when returned in Jupyter; ``fig.savefig``
-        writes it again.
+    NotebookFigure
+        A :class:`matplotlib.figure.Figure` not registered with pyplot. Without ``path``, Jupyter
+        displays it exactly once when it is returned (in a fresh kernel, with or without
+        ``%matplotlib inline``); with ``path`` it is written there and not displayed (Jupyter
+        shows the file's name instead). ``fig.savefig`` writes it again.
 
     Examples
     --------
@@ -183,7 +190,7 @@ def plot_trajectory(
     >>> [ax.get_title() for ax in fig.axes]  # doctest: +NORMALIZE_WHITESPACE
     ['coordinates', 'multipliers (constraint forces)', 'energy balance', 'constraint residuals']
     """
-    from matplotlib.figure import Figure
+    from pfaff.results.notebook import NotebookFigure
 
     if path is not None:
         figure_format(path)  # refuse an unknown format before drawing anything
@@ -198,7 +205,9 @@ def plot_trajectory(
     if m and len(t):
         panels.append("residual")
     rows, cols = (2, 2) if len(panels) == 4 else (len(panels), 1)
-    fig = Figure(figsize=(11, 7) if cols == 2 else (9, 2.6 * rows + 0.8), layout="constrained")
+    fig = NotebookFigure(
+        figsize=(11, 7) if cols == 2 else (9, 2.6 * rows + 0.8), layout="constrained"
+    )
     axes = fig.subplots(rows, cols, sharex=True, squeeze=False).ravel()
     for ax, panel in zip(axes, panels, strict=True):
         if panel == "q":

@@ -1,6 +1,7 @@
 """The root-locus figure: eigenvalues of a linearization against the parameter varied.
 
-Made with :class:`matplotlib.figure.Figure`, not pyplot (see :mod:`pfaff.results.figures`).
+A :class:`pfaff.results.notebook.NotebookFigure`, made without pyplot (see
+:mod:`pfaff.results.figures`).
 """
 
 from __future__ import annotations
@@ -30,11 +31,11 @@ def locus_figure(values: np.ndarray, eigenvalues: np.ndarray, label: str = "para
     >>> [ax.get_ylabel() for ax in fig.axes]
     ['Re s (1/s)', 'Im s (1/s)']
     """
-    from matplotlib.figure import Figure
+    from pfaff.results.notebook import NotebookFigure
 
     values = np.asarray(values, dtype=float)
     eig = np.asarray(eigenvalues, dtype=complex).reshape(len(values), -1)
-    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    fig = NotebookFigure(figsize=(6.4, 5.6), layout="constrained")
     ax_re, ax_im = fig.subplots(2, 1, sharex=True)
     x = np.repeat(values, eig.shape[1])
     ax_re.plot(x, eig.real.ravel(), ".", ms=3, color="C0")

@@ -33,9 +33,10 @@ def plot_ring(rep: dict, path: str | os.PathLike | None = None) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        Made without pyplot (nothing is left open there).
+        Made without pyplot (nothing is left open there); shown once in Jupyter, or not at all
+        when written to ``path`` (:class:`pfaff.results.notebook.NotebookFigure`).
     """
-    from matplotlib.figure import Figure
+    from pfaff.results.notebook import NotebookFigure
 
     if path is not None:
         figure_format(path)  # refuse an unknown format before drawing anything
@@ -45,7 +46,7 @@ def plot_ring(rep: dict, path: str | os.PathLike | None = None) -> Figure:
     n, r = rep["particles"], rep["parameters"]["r"]
     F = rep["parameters"]["F"]
     x, th = q[0], q[1:]
-    fig = Figure(figsize=(12, 6), layout="constrained")
+    fig = NotebookFigure(figsize=(12, 6), layout="constrained")
     ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.25]})
     # --- the ring
     s = np.linspace(0, 2 * np.pi, 400)

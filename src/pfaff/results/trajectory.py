@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import csv
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from pfaff.core.display import number, summary_html
 from pfaff.core.errors import StateError
 from pfaff.core.files import atomic_path
 
@@ -150,6 +152,53 @@ class Trajectory:
             f"<Trajectory {self.method}: {len(self.t)} points, {span}, status {self.status!r}, "
             f"max |residual| {np.abs(self.constraint_residual).max(initial=0):.2e}>"
         )
+
+    def summary(self) -> list[tuple[str, str]]:
+        """The run in a few (label, value) rows: status, span, steps, residuals, energy
+        balance, events; what a notebook shows (:meth:`_repr_html_`).
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+        >>> traj = pfaff.simulate(model, [1.0], [0.0], (0.0, 1.0), t_eval=[0.0, 0.5, 1.0])
+        >>> dict(traj.summary())["span"]
+        't = 0 … 1 (3 reported times)'
+        """
+        k = len(self.t)
+        status = self.status if self.status == "success" else f"{self.status}: {self.message}"
+        span = f"t = {number(self.t[0])} … {number(self.t[-1])}" if k else "no states"
+        stats = ", ".join(
+            f"{key} {self.stats[key]}"
+            for key in ("steps", "rejected", "nfev", "projections")
+            if isinstance(self.stats.get(key), int | np.integer)
+        )
+        rows = [
+            ("status", status),
+            ("method", self.method),
+            ("span", f"{span} ({k} reported times)"),
+        ]
+        rows.append(("steps", stats or "—"))
+        if self.multiplier_names and k:
+            f, g = np.abs(self.position_residual).max(), np.abs(self.velocity_residual).max()
+            rows.append(("constraint residual", f"max |f| {number(f)}, max |A q̇ + b| {number(g)}"))
+        if k:
+            balance = f"max |T + V − E₀ − W_nc| {number(np.abs(self.energy_balance).max())}"
+            if np.any(self.nc_work):
+                balance += f" (W_nc at the end {number(self.nc_work[-1])})"
+            rows.append(("energy balance", balance))
+        if self.events:
+            names = Counter(e.name for e in self.events)
+            rows.append(("events", ", ".join(f"{n} × {c}" for n, c in names.items())))
+        if self.switches:
+            rows.append(("MRP switches", str(len(self.switches))))
+        if self.redundant_rows.size and self.redundant_rows.max() > 0:
+            rows.append(("redundant rows", f"up to {int(self.redundant_rows.max())}"))
+        return rows
+
+    def _repr_html_(self) -> str:
+        n, m = len(self.coordinate_names), len(self.multiplier_names)
+        return summary_html(f"pfaff.Trajectory: {n} coordinates, {m} multipliers", self.summary())
 
     # ------------------------------------------------------------------ interpolation
     def at(self, t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -324,14 +373,17 @@ class Trajectory:
         Parameters
         ----------
         path : str or Path, optional
-            Also write the figure there (PNG, PDF, SVG, ...; from the extension).
+            Write the figure there (PNG, PDF, SVG, ...; from the extension; atomically).
         units : dict of str to str, optional
             Units by coordinate or multiplier name; ``"t"`` and ``"energy"`` default to s and J.
 
         Returns
         -------
         matplotlib.figure.Figure
-            Made without pyplot, so Jupyter shows it once.
+            Made without pyplot. Without ``path``, Jupyter displays it exactly once (in a fresh
+            kernel, with or without ``%matplotlib inline``). With ``path`` the file is written and
+            the figure returned without being displayed (Jupyter shows the file's name; show the
+            picture with ``IPython.display.Image(path)``).
         """
         from pfaff.results.figures import plot_trajectory
 

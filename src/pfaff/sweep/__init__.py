@@ -8,7 +8,8 @@ results come back as one :class:`xarray.Dataset` (:mod:`.result`).
 
 from pfaff.sweep.driver import sweep
 from pfaff.sweep.grid import Grid, make_grid, parse_vary
-from pfaff.sweep.result import summary, write_netcdf
+from pfaff.sweep.result import write_netcdf
+from pfaff.sweep.summary import summary
 from pfaff.sweep.worker import SweepSpec, run_batch
 
 __all__ = [

@@ -15,62 +15,76 @@ from __future__ import annotations
 import logging
 import math
 import os
-import pickle
 import socket
 import sys
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import OptionError, PfaffError
+from pfaff.core.errors import OptionError
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.memory import refuse_beyond
-from pfaff.modelfile import ModelFile, load_model
+from pfaff.modelfile import ModelFile
+from pfaff.numeric.value import ModelValue
 from pfaff.sweep.grid import make_grid
 from pfaff.sweep.result import Results
-from pfaff.sweep.worker import SweepSpec, run_batch, with_contacts
+from pfaff.sweep.source import names_of, source
+from pfaff.sweep.worker import SweepSpec, run_batch
 
 TASK_SECONDS = 0.1  # shortest task (Dask's overhead is ~1 ms per task)
 LONGEST_TASK = 2.0  # longest task aimed at when the sweep is large (load balance, progress)
 TASKS_PER_WORKER = 4
 SAMPLES = 201
 SYNC = ("synchronous", "sync")
-PASSED = ("t_end", "samples")  # [simulate] keys the sweep uses itself, not pfaff.simulate
 
 
 @checked_keywords
 def sweep(
-    model: str | os.PathLike | ModelFile,
+    model: str | os.PathLike | ModelFile | ModelValue,
     vary: Mapping[str, Sequence[float] | np.ndarray],
     *,
+    q0: Sequence[float] | np.ndarray | None = None,
+    qd0: Sequence[float] | np.ndarray | None = None,
+    t_span: tuple[float, float] | None = None,
     t_end: float | None = None,
     samples: int | None = None,
+    options: Mapping[str, Any] | None = None,
     scheduler: Any = None,
     workers: int | None = None,
     progress: bool | None = None,
 ) -> Any:
-    """Simulate a model file over a grid of parameter values and initial states.
+    """Simulate a model file or a compiled model over a grid of parameter values and initial
+    states.
 
-    Every run starts at t = 0 with the file's initial state (the varied entries replaced), uses
-    the file's ``[simulate]`` settings (method, tolerances, ...) and is sampled at ``t_eval =
-    linspace(0, t_end, samples)``.
+    Every run starts at t0 (0 for a file) with the base initial state (the varied entries
+    replaced), uses the run settings (a file's ``[simulate]``: method, tolerances, ...;
+    ``options`` added) and is sampled at ``t_eval = linspace(t0, t_end, samples)``.
 
     Parameters
     ----------
-    model : str, PathLike or ModelFile
-        A model file, or one loaded by :func:`pfaff.load_model` (its ``parameters``, ``q0``,
-        ``qd0`` and ``simulate`` as they are now; its file is read again for the workers).
+    model : str, PathLike, ModelFile or compiled model
+        A model file, one loaded by :func:`pfaff.load_model` (its ``parameters``, ``q0``,
+        ``qd0`` and ``simulate`` as they are now; its file is read again for the workers), or a
+        compiled model (``eom.compile(...)``, its parameter values the base; then ``q0`` and
+        ``t_span`` are required).
     vary : dict of str to array_like
         Name -> values, one dimension of the result each, in this order: a parameter (``"L"``),
         an initial coordinate ``"q0.<coordinate>"`` or an initial speed ``"qd0.<coordinate>"``.
         The runs are the outer product.
+    q0, qd0 : array_like, shape (n,), optional
+        The base initial state (a file's ``[initial]`` by default; ``qd0`` of a compiled model
+        defaults to zero).
+    t_span : (float, float), optional
+        Start and end time (a file's: 0 and its ``t_end``).
     t_end : float, optional
-        End time; default: the file's ``[simulate] t_end``.
+        End time from t = 0 (instead of ``t_span``); default: the file's ``[simulate] t_end``.
     samples : int, optional
         Reported times per run; default: the file's ``[simulate] samples``, else 201.
+    options : dict, optional
+        Keyword arguments of :func:`pfaff.simulate` for every run (``method``, ``rtol``, ...),
+        over a file's ``[simulate]`` settings.
     scheduler : None, str or distributed.Client
         None: start a local Dask cluster of ``workers`` processes, closed at the end.
         ``"tcp://host:8786"``: an existing cluster's scheduler. A ``distributed.Client`` (TLS,
@@ -93,11 +107,14 @@ def sweep(
         ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``,
         and ``status``: "complete", or "interrupted" after Ctrl-C or SIGTERM (the cluster shut
         down, the runs done kept, the others with status "interrupted" and NaN states).
+        In a notebook it shows a summary first (:class:`pfaff.sweep.dataset.SweepDataset`).
 
     Raises
     ------
     OptionError
         A bad name or value in ``vary``, no end time, a bad option.
+    StateError
+        A bad ``q0`` or ``qd0``.
     ModelFileError
         The file cannot be read.
     PfaffError
@@ -109,10 +126,10 @@ def sweep(
     ``if __name__ == "__main__":`` in a script. Workers of an existing cluster need pfaff
     installed; a worker process runs one batch of a model at a time (its compiled kernels own
     their buffers), so start them with one thread each (``dask worker --nthreads 1 --nworkers
-    N``). Parameters change at run time, so the file is compiled once per worker process; see
-    :meth:`pfaff.NumericModel.with_parameters` for what that costs per run. (``pfaff.sweep`` is
-    this function, so ``import pfaff.sweep.worker as w`` fails: ``from pfaff.sweep import
-    worker`` reaches the module.)
+    N``). The model is compiled once, here, and shipped pickled; each run takes its values
+    through :meth:`pfaff.NumericModel.with_parameters`. (``pfaff.sweep`` is this function, so
+    ``import pfaff.sweep.worker as w`` fails: ``from pfaff.sweep import worker`` reaches the
+    module.)
 
     Examples
     --------
@@ -135,120 +152,53 @@ def sweep(
     (('k', 'q0.x', 'time', 'coordinate'), [['success', 'success'], ['success', 'success']])
     >>> np.round(ds.q.sel(time=np.pi, coordinate="x").values, 6).tolist()  # x0 cos(√k t)
     [[-1.0, -2.0], [1.0, 2.0]]
+
+    A compiled model, its initial state and time span given here:
+
+    >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    >>> ds = pfaff.sweep(model, {"L": [1.0, 2.0]}, q0=[0.1], t_span=(0.0, 1.0), samples=2,
+    ...                  scheduler="synchronous")
+    >>> ds.status.values.tolist(), ds.time.values.tolist()
+    (['success', 'success'], [0.0, 1.0])
     """
     start = time.perf_counter()
-    mf, text = _load(model)
-    coordinates = _coordinates(mf)
-    grid = make_grid(vary, list(mf.parameters), coordinates)
-    t_end = _end_time(mf, t_end)
-    samples = _samples(mf, samples)
+    src = source(model, q0=q0, qd0=qd0, t_span=t_span, t_end=t_end, options=options)
+    grid = make_grid(vary, list(src.base.parameters), list(src.base.coordinates))
+    samples = _samples(src.samples if samples is None else samples)
     refuse_beyond(  # the results: q and q̇ of every run at every reported time
-        16.0 * grid.size * samples * max(len(coordinates), 1),
+        16.0 * grid.size * samples * max(len(src.base.coordinates), 1),
         f"a sweep of {grid.size} runs of {samples} samples",
         "vary fewer values, or report fewer samples",
     )
-    options = {k: v for k, v in mf.simulate.items() if k not in PASSED}
-    spec = SweepSpec(
-        text=text,
-        filename=mf.path.name,
-        parameters=dict(mf.parameters),
-        q0=tuple(float(x) for x in mf.q0),
-        qd0=tuple(float(x) for x in mf.qd0),
-        coordinates=tuple(coordinates),
-        grid=grid,
-        t_eval=np.linspace(0.0, t_end, samples),
-        options=options,
-        model=shipped_model(mf),
-    )
+    spec = src.spec(grid, samples)
     if workers is not None and (
         isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1
     ):
         raise OptionError(f"`workers` must be a whole number of at least 1, got {workers!r:.40}")
     show = sys.stderr.isatty() if progress is None else bool(progress)
-    results = Results(grid, samples, len(coordinates))
+    results = Results(grid, samples, len(spec.coordinates))
     run_info = _execute(spec, results, scheduler, workers, show)
     if not results.names:
-        results.names = _names_of(mf)
+        results.names = names_of(src)
     attrs = {
-        "model": mf.name,
-        "file": str(mf.path),
-        "t_end": t_end,
+        "model": src.name,
+        **({"file": src.file} if src.file is not None else {}),
+        "t0": src.t0,
+        "t_end": src.t_end,
         "samples": samples,
-        "method": str(options.get("method", "projection")),
+        "method": str(spec.options.get("method", "projection")),
         **run_info,
         "wall_seconds": time.perf_counter() - start,
     }
     return results.dataset(spec.t_eval, attrs)
 
 
-def shipped_model(mf: ModelFile) -> bytes | None:
-    """The file's model derived and compiled once, here, and pickled for the workers (each
-    unpickles it once per process instead of deriving and compiling the file); None when it
-    does not compile with the file's values (each run then reports why)."""
-    system = mf.system
-    try:
-        eom = system.equations()
-        used = {s.name for s in eom.parameters}
-        model = eom.compile({k: v for k, v in mf.parameters.items() if k in used})
-    except PfaffError:
-        return None
-    return pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL)
-
-
-def _load(model: object) -> tuple[ModelFile, str]:
-    if isinstance(model, ModelFile):
-        mf = model
-    elif isinstance(model, str | os.PathLike):
-        mf = load_model(model)
-    else:
-        raise TypeError(
-            f"`model` must be a model file's path or a pfaff.ModelFile, got {type(model).__name__}"
-        )
-    try:
-        text = Path(mf.path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise OptionError(
-            f"`model`: its file {mf.path} cannot be read again for the workers ({e})"
-        ) from None
-    return mf, text
-
-
-def _coordinates(mf: ModelFile) -> list[str]:
-    return [str(getattr(q, "func", q)) for q in mf.system.coordinates]
-
-
-def _end_time(mf: ModelFile, t_end: float | None) -> float:
-    if t_end is None:
-        if "t_end" not in mf.simulate:
-            raise OptionError(
-                f"no end time: pass `t_end` (--t-end) or set t_end in [simulate] of {mf.path}"
-            )
-        t_end = mf.simulate["t_end"]
-    if isinstance(t_end, bool) or not isinstance(t_end, int | float | np.floating | np.integer):
-        raise OptionError(f"`t_end` must be a number, got {t_end!r:.40}")
-    if not (math.isfinite(t_end) and t_end > 0):
-        raise OptionError(f"`t_end` must be positive and finite, got {t_end!r}")
-    return float(t_end)
-
-
-def _samples(mf: ModelFile, samples: int | None) -> int:
+def _samples(samples: object) -> int:
     if samples is None:
-        samples = mf.simulate.get("samples", SAMPLES)
+        samples = SAMPLES
     if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples < 2:
         raise OptionError(f"`samples` must be a whole number of at least 2, got {samples!r:.40}")
     return int(samples)
-
-
-def _names_of(mf: ModelFile) -> dict[str, list[str]]:
-    """Coordinate, multiplier and constraint names from the derivation (every run failed
-    before its model was compiled: the workers had none to report)."""
-    eom = mf.system.equations()
-    names = {
-        "coordinate_names": [str(q.func) for q in eom.coordinates],
-        "multiplier_names": [str(s) for s in eom.multipliers],
-        "constraint_names": list(eom.constraint_names),
-    }
-    return with_contacts(names, [c.name for c in mf.system.contacts])
 
 
 def _execute(

@@ -1,4 +1,4 @@
-"""A sweep's results gathered into one :class:`xarray.Dataset`, and their summary."""
+"""A sweep's results gathered into one :class:`xarray.Dataset`, and its netCDF file."""
 
 from __future__ import annotations
 
@@ -50,8 +50,9 @@ class Results:
         self.status[indices], self.message[indices] = "failed", message
 
     def dataset(self, t_eval: np.ndarray, attrs: dict[str, Any]) -> Any:
-        """The :class:`xarray.Dataset` of the sweep (see :func:`pfaff.sweep`)."""
-        import xarray as xr
+        """The :class:`xarray.Dataset` of the sweep (see :func:`pfaff.sweep`), as a
+        :class:`~pfaff.sweep.dataset.SweepDataset` (a summary in notebooks)."""
+        from pfaff.sweep.dataset import SweepDataset
 
         g, names = self.grid, self.names
         dims, shape = g.names, g.shape
@@ -78,53 +79,11 @@ class Results:
             "seconds": (dims, self.seconds.reshape(shape)),
         }
         attrs = {**attrs, "runs": g.size, "succeeded": int(ok.sum()), "failed": int((~ok).sum())}
-        ds = xr.Dataset(data, coords=coords, attrs=attrs)
+        ds = SweepDataset(data, coords=coords, attrs=attrs)
         ds["energy_error"].attrs["description"] = "max |T + V - E0 - W_nc| over the run"
         ds["constraint_residual"].attrs["description"] = "max |f|, |A qd + b| over the run"
         ds["seconds"].attrs["description"] = "wall time of the run in its worker"
         return ds
-
-
-def summary(ds: Any, failures: int = 5) -> dict[str, Any]:
-    """Counts, the worst errors and the first failed runs of a sweep's dataset (JSON-ready).
-
-    Examples
-    --------
-    >>> import numpy as np, xarray as xr
-    >>> ds = xr.Dataset({"status": ("L", np.array(["success", "failed"])),
-    ...                  "message": ("L", np.array(["", "blew up"])),
-    ...                  "energy_error": ("L", [1e-9, np.nan]),
-    ...                  "constraint_residual": ("L", [0.0, np.nan])},
-    ...                 coords={"L": [1.0, 2.0]})
-    >>> s = summary(ds)
-    >>> s["runs"], s["succeeded"], s["failures"]
-    (2, 1, [{'point': {'L': 2.0}, 'status': 'failed', 'message': 'blew up'}])
-    """
-    status = ds["status"].values
-    bad = np.argwhere(status != "success")
-    dims = ds["status"].dims
-    out: dict[str, Any] = {
-        "runs": int(status.size),
-        "succeeded": int((status == "success").sum()),
-        "failed": int(bad.shape[0]),
-        "dims": {d: int(ds.sizes[d]) for d in dims},
-        "max_energy_error": _finite_max(ds["energy_error"].values),
-        "max_constraint_residual": _finite_max(ds["constraint_residual"].values),
-    }
-    out["failures"] = [
-        {
-            "point": {d: float(ds[d].values[j]) for d, j in zip(dims, idx, strict=True)},
-            "status": str(status[tuple(idx)]),
-            "message": str(ds["message"].values[tuple(idx)]),
-        }
-        for idx in bad[:failures]
-    ]
-    return out
-
-
-def _finite_max(a: np.ndarray) -> float | None:
-    a = a[np.isfinite(a)]
-    return float(a.max()) if a.size else None
 
 
 def write_netcdf(ds: Any, path: str | Path) -> Path:

@@ -1,6 +1,7 @@
 """What a sweep's task does in a worker process: compile once, then run a batch of grid points.
 
-A task carries the model file's text (a few kilobytes, not code: it is read with
+A task carries the compiled model, pickled (a model file's is compiled once by the driver), or
+else the model file's text (a few kilobytes, not code: it is read with
 :func:`pfaff.load_model`, which executes nothing) and the indices of its runs. Each process keeps
 the models it compiled in :data:`_MODELS`, keyed by the SHA-256 of the text: the file is derived
 and compiled at most once per process, and each run takes its parameter values through
@@ -56,7 +57,7 @@ class SweepSpec:
     options : dict
         Keyword arguments of :func:`pfaff.simulate` (method, tolerances, ...).
     model : bytes or None
-        The compiled model, pickled by the driver (:func:`pfaff.sweep.driver.shipped_model`);
+        The compiled model, pickled by the driver (:func:`pfaff.sweep.source.shipped_model`);
         None: each worker process derives and compiles the file itself.
     """
 
@@ -203,10 +204,8 @@ def _run(entry: _Compiled, spec: SweepSpec, i: int) -> tuple[Any, str, str]:
     try:
         params, q0, qd0 = spec.run_inputs(i)
         model = entry.model(params)
-        t_end = float(spec.t_eval[-1])
-        traj = simulate(
-            model, q0, qd0, (0.0, t_end), t_eval=spec.t_eval, progress=False, **spec.options
-        )
+        span = (float(spec.t_eval[0]), float(spec.t_eval[-1]))
+        traj = simulate(model, q0, qd0, span, t_eval=spec.t_eval, progress=False, **spec.options)
     except PfaffError as e:
         return None, "failed", str(e)
     except Exception as e:  # a failure in the user's equations (overflow, ...) or a bug
