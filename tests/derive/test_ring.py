@@ -7,9 +7,9 @@ import pytest
 import sympy as sp
 
 import pfaff
-from conftest import F, M, on_ring_manifold, r
 from pfaff.cli.backsub import multipliers_by_back_substitution
 from pfaff.derive.reduce import tidy
+from ringsyms import F, M, on_ring_manifold, r
 
 t = pfaff.t
 

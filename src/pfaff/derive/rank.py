@@ -21,6 +21,7 @@ import scipy.sparse as sps
 import symengine
 
 from pfaff.core.errors import ConstraintError, RedundancyWarning
+from pfaff.core.stack import outside_pfaff
 from pfaff.derive.compile import build_model
 from pfaff.derive.compile_family import structured_model
 from pfaff.derive.equations import Derivation
@@ -97,7 +98,7 @@ def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> list[list[st
         "one another. The motion is determined; on these rows only Aᵀλ is, and pfaff reports "
         "the minimum-norm multipliers (eom.redundant_sets, model.redundancy)",
         RedundancyWarning,
-        stacklevel=4,
+        stacklevel=outside_pfaff(),
     )
     return named
 

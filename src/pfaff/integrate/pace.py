@@ -16,14 +16,13 @@ smooth run over a long span takes steady steps and proceeds until it ends or is 
 
 from __future__ import annotations
 
-import os
-import sys
 import warnings
 
 import numpy as np
 
 from pfaff.core.errors import LongRunWarning
 from pfaff.core.memory import available_bytes
+from pfaff.core.stack import outside_pfaff
 from pfaff.integrate.stepper import _RunFailure
 
 WINDOW = 200  # steps over which the pace is measured
@@ -130,17 +129,8 @@ class Pace:
                 f"remaining {self.t1 - after:.3g} of its span would need about "
                 f"{estimate / 2**30:.3g} GiB of memory: pass t_eval to keep only chosen times",
                 LongRunWarning,
-                stacklevel=_outside_pfaff(),
+                stacklevel=outside_pfaff(),
             )
-
-
-def _outside_pfaff() -> int:
-    """The stack level of the first caller outside pfaff (where a warning should point)."""
-    package = os.path.dirname(os.path.dirname(__file__))
-    frame, level = sys._getframe(1), 1
-    while frame is not None and frame.f_code.co_filename.startswith(package):
-        frame, level = frame.f_back, level + 1
-    return level
 
 
 HINT = (

@@ -14,10 +14,9 @@ from typing import TYPE_CHECKING
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
-from sympy.physics.vector import ReferenceFrame
 
 from pfaff.core.errors import ModelError, ModelTypeError
-from pfaff.core.symbols import as_expr, t
+from pfaff.core.symbols import as_expr, is_physics_vector, t
 from pfaff.mechanics.attitude import Attitude, PlanarAngle, Rotation
 from pfaff.mechanics.bodies import check_rotation, inertia_matrix
 
@@ -136,7 +135,7 @@ def _dcm(system: SystemSpec, attitude: object, frame: object, what: str) -> sp.M
     or a matrix checked to be a rotation."""
     if isinstance(attitude, Attitude):
         return attitude.dcm
-    if isinstance(attitude, ReferenceFrame):
+    if is_physics_vector(attitude, "ReferenceFrame"):
         return system._frame_dcm(attitude, frame, what)[0]
     if isinstance(attitude, sp.MatrixBase | list | tuple):
         dcm = sp.Matrix(attitude)

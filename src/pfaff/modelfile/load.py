@@ -78,6 +78,7 @@ from pfaff.core.safe_expr import (
     parse_expression,
     parse_number,
 )
+from pfaff.core.stack import outside_pfaff
 from pfaff.core.symbols import coordinates as make_coordinates
 from pfaff.core.symbols import t
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
@@ -152,11 +153,11 @@ class ModelFile:
             )
         values = {**self.parameters, **parameters}
         used = {s.name for s in self.system.parameters}
-        warn_unused(self.path, [k for k in values if k not in used], stacklevel=2)
+        warn_unused(self.path, [k for k in values if k not in used])
         return self.system.equations().compile({k: v for k, v in values.items() if k in used})
 
 
-def warn_unused(path: Path, names: list[str], what: str = "parameter", stacklevel: int = 2) -> None:
+def warn_unused(path: Path, names: list[str], what: str = "parameter") -> None:
     """A :class:`ModelWarning` naming the declared ``names`` that no expression uses."""
     if names:
         listed, many = ", ".join(f"`{n}`" for n in names), len(names) > 1
@@ -165,7 +166,7 @@ def warn_unused(path: Path, names: list[str], what: str = "parameter", stackleve
             f"expression of the model: {'their values change' if many else 'its value changes'} "
             "nothing",
             ModelWarning,
-            stacklevel=stacklevel + 1,
+            stacklevel=outside_pfaff(),
         )
 
 
@@ -442,8 +443,8 @@ class _Loader:
                 if dep not in live:
                     live.add(dep)
                     todo.append(dep)
-        warn_unused(self.path, [n for n in uses if n not in live], "input", stacklevel=4)
-        warn_unused(self.path, [k for k in values if k not in used], stacklevel=4)
+        warn_unused(self.path, [n for n in uses if n not in live], "input")
+        warn_unused(self.path, [k for k in values if k not in used])
 
     def system(self, model: dict, name: str) -> System:
         coords = model.get("coordinates", [])

@@ -41,6 +41,7 @@ import sympy as sp
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError
 from pfaff.core.keywords import checked_keywords
+from pfaff.core.stack import outside_pfaff
 from pfaff.core.symbols import coordinates as make_coordinates
 from pfaff.core.symbols import t
 from pfaff.mechanics.attitude import Rotation
@@ -326,7 +327,9 @@ def _joint(elem: ET.Element) -> _Joint:
     if damping < 0:
         raise ModelError(f"{what}: negative damping {damping:g}")
     if friction != 0:
-        warnings.warn(f"{what}: Coulomb friction {friction:g} is ignored", stacklevel=4)
+        warnings.warn(
+            f"{what}: Coulomb friction {friction:g} is ignored", stacklevel=outside_pfaff()
+        )
     return _Joint(name, kind, ends[0], ends[1], xyz, rpy, axis, limits, damping)
 
 

@@ -33,6 +33,7 @@ from collections.abc import Callable
 import numpy as np
 
 from pfaff.core.errors import OptionError
+from pfaff.core.stack import outside_pfaff
 
 EVALUATORS = ("template", "python", "machine")
 MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
@@ -130,7 +131,7 @@ class MachineCode:
                 f"pfaff: machine code unavailable ({reason}); evaluating with the generated "
                 "Python code instead",
                 RuntimeWarning,
-                stacklevel=4,
+                stacklevel=outside_pfaff(),
             )
             return None
         return compiled

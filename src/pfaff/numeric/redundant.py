@@ -24,6 +24,7 @@ import scipy.linalg
 import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError, RedundancyWarning
+from pfaff.core.stack import outside_pfaff
 from pfaff.numeric.rank import null_basis, redundant_sets
 
 _geqp3 = scipy.linalg.lapack.dgeqp3  # pivoted QR without scipy.linalg.qr's checks (µs per call)
@@ -105,7 +106,7 @@ def warn(names: Sequence[str], A: np.ndarray, where: str) -> None:
         "another. The motion is determined; on these rows only Aᵀλ is, and pfaff reports the "
         "minimum-norm multipliers (model.redundancy names the indeterminate directions)",
         RedundancyWarning,
-        stacklevel=5,
+        stacklevel=outside_pfaff(),
     )
 
 
