@@ -7,6 +7,7 @@ the bias from them on demand. The user sees it as :class:`pfaff.EquationsOfMotio
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -29,6 +30,14 @@ SYMBOLIC_LIMIT = 100_000  # largest n for symbolic matrices (the templates are d
 
 
 _TRIG = (sp.sin, sp.cos, sp.tan)
+READABLE_NODES = 500  # no entry of at most 80 operations has more nodes: a cheap first bound
+READABLE_ANGLES = 2  # Fu's rules and trigsimp on 3 angles: 1-20 s per entry of a 6-joint arm
+
+
+def bounded_nodes(e: sp.Expr, limit: int) -> int:
+    """The number of nodes of ``e``, counting at most ``limit + 1`` (a bounded walk, where
+    ``count_ops`` walks the whole tree: seconds for an arm's entries of 10⁵ operations)."""
+    return sum(1 for _ in itertools.islice(sp.preorder_traversal(e), limit + 1))
 
 
 def readable_form(e: sp.Expr) -> sp.Expr:
@@ -36,7 +45,8 @@ def readable_form(e: sp.Expr) -> sp.Expr:
 
     Bounded: ``trigsimp`` costs about a second on 60 operations with two angles, so bigger
     expressions go through Fu's rules first and ``trigsimp`` sees only what they left, when it
-    is small; over 80 operations an entry is shown as derived. Applied per template when a
+    is small; over 80 operations or over two angles an entry is shown as derived (Fu's rules
+    took 20 s on one 75-operation entry of three angles of a 6-joint arm and left it as it was). Applied per template when a
     readable property is first read, never on the way to numbers (``compile``).
 
     Examples
@@ -45,10 +55,10 @@ def readable_form(e: sp.Expr) -> sp.Expr:
     >>> readable_form(sp.sin(a) * sp.sin(b) + sp.cos(a) * sp.cos(b))
     cos(a - b)
     """
-    if not e.has(*_TRIG):
+    if not e.has(*_TRIG) or bounded_nodes(e, READABLE_NODES) > READABLE_NODES:
         return e
     n = sp.count_ops(e)
-    if n > 80:
+    if n > 80 or len({f.args[0] for f in e.atoms(*_TRIG)}) > READABLE_ANGLES:
         return e
     s = e if n <= 24 else sp.fu(e)
     if sp.count_ops(s) <= 24:
@@ -250,7 +260,13 @@ class Derivation:
         key = (id(block), attr)
         cache = self._readable_cache
         if key not in cache:
-            cache[key] = {k: readable_form(e) for k, e in entries.items()}
+            # one simplification per distinct entry: a link's rows of parallel joint axes repeat
+            # (six equal entries of the UR-type arm's wrist)
+            forms = cache.setdefault("forms", {})
+            cache[key] = {
+                k: forms[e] if e in forms else forms.setdefault(e, readable_form(e))
+                for k, e in entries.items()
+            }
         return cache[key]
 
     @cached_property

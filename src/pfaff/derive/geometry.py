@@ -384,7 +384,7 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
     """
     system = getattr(eom, "system", None)
     pieces = [p for p in getattr(system, "pieces", ()) if p.kind == "particle"]
-    if system is None or not pieces:
+    if system is None or not (pieces or system.bodies):
         return None
     pieces += [p for p in system.pieces if p.kind == "force" and p.template is None]
     groups: dict[tuple, _Group] = {}
@@ -406,7 +406,7 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
             names += [f"{piece.name} {i}" for i in ks]
             kinds += ["family"] * len(ks)
             families.append((piece.name, start, len(names)))
-    dim = max(len(g.exprs) for g in groups.values())
+    dim = max((len(g.exprs) for g in groups.values()), default=3)  # bodies alone: spatial
     bodies = [_body(system, body, dim) for body in system.bodies]
     linkable = sum(k != "family" for k in kinds)
     constraints = []

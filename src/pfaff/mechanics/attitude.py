@@ -446,6 +446,11 @@ class Rotation(Attitude):
     """
 
     kind = "rotation"
+    #: Body components of the body's mass-centre velocity when whoever made C knows them (a
+    #: chain built joint by joint, :func:`pfaff.load_urdf`): ``add_rigid_body`` then adds the
+    #: translation as the kinetic energy ½ m |v|² in body axes, not as a particle at the
+    #: inertial position (the same T; M entries without the rotations of the joints above).
+    centre_velocity: sp.Matrix | None = None
 
     def __init__(self, dcm: object, source: str = "") -> None:
         if not isinstance(dcm, sp.MatrixBase | list | tuple | np.ndarray):
