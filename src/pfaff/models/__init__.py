@@ -312,3 +312,9 @@ from pfaff.models.bodies import (  # noqa: E402, F401  (the rigid-body zoo)
 from pfaff.models.bricard import BRICARD, bricard, bricard_state  # noqa: E402, F401  (IFToMM A04)
 from pfaff.models.diffdrive import diffdrive  # noqa: E402, F401  (a robot with a redundant row)
 from pfaff.models.fourbar3d import FOURBAR3D, fourbar3d, fourbar3d_state  # noqa: E402, F401
+from pfaff.models.robot import (  # noqa: E402, F401  (an n-joint spatial arm)
+    robot_arm,
+    robot_arm_state,
+    robot_arm_urdf,
+    robot_arm_values,
+)
