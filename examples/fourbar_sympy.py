@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 from sympy.physics.mechanics import (
-    Point,
     PinJoint,
+    Point,
     ReferenceFrame,
     RigidBody,
     System,
