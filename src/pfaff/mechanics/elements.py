@@ -117,7 +117,7 @@ class ElementsMixin:
         else:  # a chain's link: both halves in body components, unexpanded (compact M entries)
             m = self._mass(m, what)
             self._scan(tuple(r), f"position of {what}", speeds=False)  # its parameters count
-            self.add_kinetic_energy(sp.Add(*(m / 2 * vc**2 for vc in v)), name=label)
+            self.add_kinetic_energy(m * sp.Add(*(vc**2 / 2 for vc in v)), name=label)
             rot = quadratic_form(inertia_c, w)
         if rot != 0:
             self.add_kinetic_energy(rot, name=f"{label} rotation")
