@@ -29,7 +29,7 @@ def test_closed_state_is_on_the_loop(example):
     model = pfaff.from_sympy(example.fourbar_system()).equations().compile(example.VALUES)
     q, qd = example.closed_state(0.7, 1.0)
     assert np.abs(model.constraint_residual(0.0, q, qd)[0]).max() < 1e-12
-    q2, _ = pfaff.consistent_state(model, q + [0, 0.05, -0.05], qd, independent=[0])
+    q2, _ = pfaff.consistent_state(model, q + np.array([0, 0.05, -0.05]), qd, independent=[0])
     assert np.abs(q2 - q).max() < 1e-10
 
 
