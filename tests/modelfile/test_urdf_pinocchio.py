@@ -93,3 +93,29 @@ def test_accelerations_against_aba(arm):
         q, qd = rng.uniform(-np.pi, np.pi, n), rng.uniform(-2.0, 2.0, n)
         qdd = model.accelerations(0.0, q, qd)[0]
         assert np.abs(qdd - ref.aba(q, qd, np.zeros(n))).max() < 1e-9
+
+
+@pytest.mark.slow
+def test_readable_equations_of_arm6_against_pinocchio():
+    """The simplified-for-reading ``mass_matrix`` and ``forcing`` of the 6-joint arm (not what
+    code is made from) at 5 random states, and the waist angle absent from both (the first
+    joint turns about gravity's axis: nothing depends on it)."""
+    import sympy as sp
+
+    system = pfaff.load_urdf(FILES[0])
+    eom = system.equations()
+    M, F = eom.mass_matrix, eom.forcing
+    q = list(system.urdf_coordinates.values())
+    qd = [c.diff(pfaff.t) for c in q]
+    xs, vs = sp.symbols("x0:6"), sp.symbols("v0:6")
+    subs = {p: system.urdf_values[p.name] for p in eom.parameters}
+    rule = dict(zip(qd, vs, strict=True)) | dict(zip(q, xs, strict=True))
+    m_sym, f_sym = M.xreplace(subs).xreplace(rule), F.xreplace(subs).xreplace(rule)
+    assert xs[0] not in m_sym.free_symbols | f_sym.free_symbols  # the waist angle
+    m_fn, f_fn = sp.lambdify([xs], m_sym), sp.lambdify([xs, vs], f_sym)
+    ref = PinocchioArm(FILES[0], list(system.urdf_coordinates))
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        x, v = rng.uniform(-np.pi, np.pi, 6), rng.uniform(-2.0, 2.0, 6)
+        assert np.abs(np.array(m_fn(x), dtype=float) - ref.mass_matrix(x)).max() < 1e-10
+        assert np.abs(-np.ravel(f_fn(x, v)) - ref.bias(x, v)).max() < 1e-10
