@@ -12,6 +12,7 @@ The package is laid out by pipeline stage, imports going only downward (see ARCH
 
 from pfaff import attitude, models
 from pfaff.api import EquationsOfMotion, RootLocus, Solution, System, root_locus
+from pfaff.api.fit import FitResult, fit
 from pfaff.api.fromsympy import from_sympy
 from pfaff.core.errors import (
     BodyInertiaError,
@@ -30,6 +31,7 @@ from pfaff.core.events import Event, EventRecord
 from pfaff.core.symbols import coordinates, t
 from pfaff.derive.work import ForceWork
 from pfaff.integrate.initial import consistent_state
+from pfaff.integrate.sensitivity import sensitivities
 from pfaff.integrate.simulation import simulate
 from pfaff.integrate.stepper import Stepper, StepperOptions
 from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
@@ -50,6 +52,7 @@ __all__ = [
     "EulerAngles",
     "Event",
     "EventRecord",
+    "FitResult",
     "ForceWork",
     "InertiaError",
     "Linearization",
@@ -75,11 +78,13 @@ __all__ = [
     "attitude",
     "consistent_state",
     "coordinates",
+    "fit",
     "from_sympy",
     "load_model",
     "load_urdf",
     "models",
     "root_locus",
+    "sensitivities",
     "simulate",
     "sweep",
     "t",

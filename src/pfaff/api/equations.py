@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import sympy as sp
+
 from pfaff.core.errors import ModelError, OptionError
 from pfaff.derive.compile import compile_equations
 from pfaff.derive.compile_family import compile_structured
+from pfaff.derive.contacts import compile_contacts
 from pfaff.derive.equations import Derivation, Solution
 from pfaff.derive.linearize import linearize as _linearize
 from pfaff.numeric.linearization import Linearization
@@ -74,7 +77,8 @@ class EquationsOfMotion(Derivation):
         Parameters
         ----------
         parameters : dict
-            Value for every symbol in :attr:`parameters`, keyed by Symbol or by name.
+            Value for every symbol in :attr:`parameters`, keyed by Symbol or by name; a parameter
+            left out takes its default (:meth:`pfaff.System.set_parameter_defaults`) if it has one.
         solver : str, optional
             The KKT solver (:mod:`pfaff.numeric.kkt`). General models: ``"range-space"`` (the
             default up to 400 unknowns, with the rank-loss floor), ``"lu"`` or ``"sparse"`` (the
@@ -101,13 +105,16 @@ class EquationsOfMotion(Derivation):
                 "System.reduce, or compile the full equations"
             )
         check_solver(solver, "family" if self.family else "general")
+        parameters = with_defaults(parameters, getattr(self.system, "parameter_defaults", {}))
         if self.family:
             if evaluator not in (None, "template"):
                 raise OptionError(
                     f"`evaluator` of a model with families must be 'template'; got {evaluator!r:.80}"
                 )
             return compile_structured(self, parameters or {}, solver=solver)
-        return compile_equations(self, parameters or {}, solver=solver, evaluator=evaluator)
+        return compile_equations(
+            self, parameters or {}, solver=solver, evaluator=evaluator, contacts=compile_contacts
+        )
 
     def linearize(
         self,
@@ -174,3 +181,11 @@ class EquationsOfMotion(Derivation):
         False
         """
         return _linearize(self, op_point, independent, independent_speeds, inputs)
+
+
+def with_defaults(parameters: dict | None, defaults: dict[str, float]) -> dict | None:
+    """``parameters`` completed by ``defaults`` (by name) where they give no value."""
+    if not defaults or not (parameters is None or isinstance(parameters, dict)):
+        return parameters
+    given = {k.name if isinstance(k, sp.Symbol) else k for k in (parameters or {})}
+    return {**{k: v for k, v in defaults.items() if k not in given}, **(parameters or {})}

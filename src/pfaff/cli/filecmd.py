@@ -258,6 +258,12 @@ def _run_report(mf: Any, traj: Any, wall: float) -> dict:
     return rep
 
 
+def _event_text(e: dict) -> str:
+    """One event: its name, kind (for a contact's) and time."""
+    kind = "" if e["kind"] == "event" else f" {e['kind']}"
+    return f"{e['name']}{kind} at t = {e['t']:.10g}"
+
+
 def _run_text(rep: dict) -> str:
     lines = [
         f"{rep['model']}: {rep['method']} to t = {rep['t_end']} — {rep['status']} ({rep['message']})"
@@ -272,12 +278,14 @@ def _run_text(rep: dict) -> str:
             f"{rep['max_constraint_residual']:.2e}"
         )
     if rep.get("events"):
-        lines.append(
-            "  events: "
-            + ", ".join(f"{e['name']} at t = {e['t']:.10g}" for e in rep["events"][:10])
-        )
+        lines.append("  events: " + ", ".join(map(_event_text, rep["events"][:10])))
         if len(rep["events"]) > 10:
             lines[-1] += f", ... ({len(rep['events'])} in all)"
+        impacts = [e for e in rep["events"] if e["kind"] in ("impact", "rest")]
+        if impacts:
+            lines.append(
+                f"  impacts: {len(impacts)}, work of their impulses {rep['impact_work']:.6g}"
+            )
     s = rep["stats"]
     lines.append("  " + ", ".join(f"{k} {v}" for k, v in s.items() if isinstance(v, int)))
     lines += [f"  {x}" for x in _redundancy_lines(rep.get("redundant_sets", []))[1:]]

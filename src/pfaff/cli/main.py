@@ -88,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
     from pfaff.cli.sweepcmd import add_parser as add_sweep_parser  # `pfaff sweep`
 
     _debug_option(add_sweep_parser(sub))
+    from pfaff.cli.fitcmd import add_parser as add_fit_parser  # `pfaff fit`
+
+    add_fit_parser(sub, _debug_option)
     return p
 
 
@@ -404,6 +407,11 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         check_files(args)
         return run_equations(args) if args.command == "equations" else run_model(args)
+    if args.command == "fit":
+        from pfaff.cli.fitcmd import run as run_fit
+
+        check_files(args)
+        return run_fit(args)
     if args.demo == "bicycle":
         check_files(args)
         return run_bicycle(args)

@@ -20,9 +20,11 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
 
     ``energy_drift`` is the largest |T + V − E₀| (kept for compatibility: with applied forces it is
     mostly their work); ``energy_balance_error`` the largest |T + V − E₀ − W_nc|, what an exact
-    motion keeps at 0; ``nc_work`` W_nc at the end.
+    motion keeps at 0; ``nc_work`` W_nc at the end, ``impact_work`` the impacts' W at the end.
+    The residuals leave out the gaps of open contacts.
     """
     res = np.abs(traj.constraint_residual)
+    res[:, 0][traj.contact_open] = 0.0  # an open contact's gap is not a residual
     k = len(traj.t)
     return {
         "method": traj.method,
@@ -35,6 +37,7 @@ def _summary(traj: Trajectory, wall: float) -> dict[str, Any]:
         "energy_drift": float(np.abs(traj.energy - traj.energy[0]).max()) if k else None,
         "energy_balance_error": float(np.abs(traj.energy_balance).max()) if k else None,
         "nc_work": float(traj.nc_work[-1]) if k else None,
+        "impact_work": float(traj.impact_work[-1]) if k else None,
         "stats": {  # only the statistics this method keeps (IDA counts no rejected steps)
             key: (int(v) if isinstance(v, int | np.integer) else v)
             for key, v in traj.stats.items()

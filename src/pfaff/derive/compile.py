@@ -249,12 +249,14 @@ def build_model(
     evaluator: str | None = None,
     inputs: Sequence[str] = (),
     timings: dict | None = None,
+    contacts: Callable | None = None,
 ) -> NumericModel:
     """Assemble a :class:`NumericModel` from the blocks of ``eom`` and ordered parameter values,
     in one place: the stream parts, the fused kernel of a small system (checked by the model
     once, :mod:`pfaff.numeric.general`), the attitude sets, the events, the geometry, the linearization
     factory and the way to other parameter values. ``evaluator``: see
-    :mod:`pfaff.numeric.evaluator`.
+    :mod:`pfaff.numeric.evaluator`. ``contacts(eom, values)``: the model's unilateral
+    constraints (:func:`pfaff.derive.contacts.compile_contacts`), or None.
     """
     params = tuple(eom.parameters)
     dyn = (
@@ -306,6 +308,7 @@ def build_model(
         inputs=inputs,
         attitudes=attitude_sets(eom),
         events=compile_events(eom, params, values),  # System.add_event, found by simulate
+        contacts=None if constraints_only or contacts is None else contacts(eom, values),
         geometry=None if constraints_only else build_geometry(eom, values),  # animations
         linearizer=None if constraints_only else linearizer_for(eom),  # NumericModel.linearize
         restream=Restream(eom, params, constraints_only),  # for model.with_parameters
@@ -352,7 +355,12 @@ def input_names(eom: Derivation) -> list[str]:
 
 
 def compile_equations(
-    eom: Derivation, parameters: dict, *, solver: str | None = None, evaluator: str | None = None
+    eom: Derivation,
+    parameters: dict,
+    *,
+    solver: str | None = None,
+    evaluator: str | None = None,
+    contacts: Callable | None = None,
 ) -> NumericModel:
     """Check ``parameters`` against the model's symbols and compile (see pfaff.EquationsOfMotion.compile)."""
     start = time.process_time()
@@ -365,9 +373,11 @@ def compile_equations(
     if "equations" in getattr(eom, "timings", {}):
         timings["equations"] = eom.timings["equations"]
     values = model_parameter_values(eom, parameters)
+    made = None if contacts is None else (lambda e, v: contacts(e, v, solver, evaluator))
     model = build_model(
-        eom, values, solver=solver, evaluator=evaluator, inputs=inputs, timings=timings
-    )
+        eom, values, solver=solver, evaluator=evaluator, inputs=inputs, timings=timings,
+        contacts=made,
+    )  # fmt: skip
     model.timings["compile"] = time.process_time() - start
     return model
 

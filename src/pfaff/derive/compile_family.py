@@ -55,6 +55,11 @@ def structured_model(
             "the system without families, or pass the events to pfaff.simulate(events=[pfaff."
             "Event(g, ...)]) as functions g(t, q, qd)"
         )
+    if getattr(eom.system, "contacts", None):
+        raise ModelError(
+            "unilateral constraints (System.add_unilateral_constraint) are not supported by "
+            "models with families yet: compile the system without families"
+        )
     params = tuple(eom.parameters)
     dyn = [dyn_streams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"]
     con = [con_streams(b, params, values) for b in eom.blocks if b.local.kind != "dynamics"]

@@ -13,7 +13,7 @@ matrices once into code of (t, q, q̇, q̈, λ, parameters) for :meth:`pfaff.Num
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -740,6 +740,17 @@ class CompiledLinearizer:
         fn = self._fns.get(which)
         if fn is None:
             fn = self._fns[which] = _generate(self.forms, self._exprs(which))
+        return fn
+
+    def generated(
+        self, key: Hashable, exprs: Callable[[LinearForms], list]
+    ) -> Callable[[np.ndarray], np.ndarray]:
+        """A function of the same x generated once from ``exprs(self.forms)`` and kept under
+        ``key``: the hook other kernels of these forms use (the variational equations,
+        :mod:`pfaff.derive.variational`)."""
+        fn = self._fns.get(key)
+        if fn is None:
+            fn = self._fns[key] = _generate(self.forms, exprs(self.forms))
         return fn
 
     def _exprs(self, which: str | tuple[int, ...]) -> list:

@@ -27,6 +27,7 @@ from pfaff.core.errors import (
     undefined_at,
 )
 from pfaff.core.events import Event, EventRecord
+from pfaff.integrate.contact import ContactRun, Layout, run_segments
 from pfaff.integrate.events import SINGULAR, AttitudeEvents, UserEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
@@ -116,7 +117,7 @@ def _stepper_class(method: object) -> type[Stepper]:
 
 def _options(kw: dict, span: tuple[float, float]) -> dict:
     """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
-    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol"):
+    for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol", "rest_speed"):
         v = _real(kw[key], key)
         if not (math.isfinite(v) and v >= 0):
             raise OptionError(f"`{key}` must be a finite number >= 0; got {kw[key]!r}")
@@ -232,6 +233,7 @@ def simulate(
     throw: bool = False,
     inputs: dict | None = None,
     events: Sequence[Event] = (),
+    rest_speed: float = 1e-6,
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -285,6 +287,10 @@ def simulate(
         (``System.add_event``, ``model.events``). Each root is bracketed on the integrator's
         dense output to 1e-12·max(1, |t|), reported in :attr:`Trajectory.events` and added as a
         reported state; a terminal event ends the run there with status "success".
+    rest_speed : float
+        With unilateral constraints (``System.add_unilateral_constraint``): a contact closing
+        at this speed or slower (gap units per second) closes without a bounce (an event of
+        kind "rest"; see :mod:`pfaff.integrate.contact`).
 
     Returns
     -------
@@ -323,7 +329,7 @@ def simulate(
         return _simulate(
             model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
             integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
-            project_output, progress, throw, inputs, events,
+            project_output, progress, throw, inputs, events, rest_speed,
         )  # fmt: skip
 
 
@@ -342,11 +348,12 @@ def _events(model: DynamicsModel, events: object) -> UserEvents:
 def _simulate(
     model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
     integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
-    project_output, progress, throw, inputs, events,
+    project_output, progress, throw, inputs, events, rest_speed=1e-6,
 ):  # fmt: skip
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
     user = _events(model, events)
+    contacts = getattr(model, "contacts", None)  # unilateral constraints (integrate/contact)
     if inputs:
         model = DrivenModel(model, inputs)
     t0, t1 = _span(t_span)
@@ -365,6 +372,7 @@ def _simulate(
             initial_tol=initial_tol,
             project_initial=project_initial,
             ida_jacobian=ida_jacobian,
+            rest_speed=rest_speed,
             project_output=project_output,
             progress=progress,
             throw=throw,
@@ -375,7 +383,7 @@ def _simulate(
     options = StepperOptions(**{f.name: opts[f.name] for f in fields(StepperOptions)})
     try:
         q0a, qd0a = initial_state(model, t0, q0, qd0, projector, opts)
-        stepper = cls(model, t0, q0a, qd0a, t1, options, projector)
+        stepper = None if contacts else cls(model, t0, q0a, qd0a, t1, options, projector)
     except _RunFailure as e:  # the method could not start
         raise SimulationError(str(e)) from None
     except (ValueError, ArithmeticError) as e:  # the user's equations, not defined at t0
@@ -384,6 +392,20 @@ def _simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = not cls.reports_drift
+    if contacts:
+        run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
+        found = _run_contacts(run, cls, options, te, t0, t1, q0a, qd0a, progress, user,
+                              project_output)  # fmt: skip
+        status, message, segs, stats, projectors = found
+        if status != "success" and throw:
+            raise SimulationError(message)
+        for p in projectors:
+            for key, v in p.stats.items():
+                stats[key] = stats.get(key, 0) + v
+        layout = Layout(model, segs)
+        return _trajectory(
+            layout, cls.name, segs, status, message, stats, projector, project_output
+        )
     power = model.power_function() if model.applied_power else None
     run = _Run(stepper, projector if project_output else None, te, t0, t1, progress, power)
     run.events = AttitudeEvents(model.attitudes)
@@ -394,6 +416,24 @@ def _simulate(
         raise SimulationError(message)
     stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
     return _trajectory(model, cls.name, run, status, message, stats, projector, project_output)
+
+
+def _run_contacts(contacts, cls, options, te, t0, t1, q0, qd0, progress, user, project_output):
+    """A run with unilateral constraints: one :class:`_Run` per segment between contact
+    events (:func:`pfaff.integrate.contact.run_segments`)."""
+
+    def segment(model, t, q, qd, events):
+        projector = Projector(model, tol=contacts.tol)
+        stepper = cls(model, t, q, qd, t1, options, projector)
+        tes = te if te is None or t == t0 else te[te > t]
+        power = model.power_function() if model.applied_power else None
+        run = _Run(stepper, projector if project_output else None, tes, t, t1, progress, power)
+        run.events, run.user = AttitudeEvents(model.attitudes), events
+        run.restart = lambda t_, q_, qd_: cls(model, t_, q_, qd_, t1, options, projector)
+        status, message = run.go(q, qd)
+        return run, status, message, projector
+
+    return run_segments(contacts, t0, q0, qd0, t1, user, segment)
 
 
 class _Run:
@@ -518,7 +558,7 @@ class _Run:
     def go(self, q0: np.ndarray, qd0: np.ndarray) -> tuple[str, str]:
         st, te = self.stepper, self.te
         k = 0  # next t_eval index
-        if te is None or te[0] == self.t0:
+        if te is None or (te.size and te[0] == self.t0):
             self._record(self.t0, q0, qd0, False, 0.0)
             k = 1 if te is not None else 0
         bar = self._bar()
@@ -660,4 +700,6 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         events=list(run.records),
         geometry=model.geometry,  # what Trajectory.animate draws
         redundant_rows=ev.get("redundant_rows", np.zeros(len(T), dtype=np.int64)),
+        impact_work=np.array(getattr(run, "IW", np.zeros(len(T)))),
+        contact_open=ev.get("open", np.zeros((len(T), m), dtype=bool)),
     )

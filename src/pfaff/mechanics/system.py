@@ -27,6 +27,7 @@ from pfaff.core.symbols import (
     t,
     validate_coordinates,
 )
+from pfaff.mechanics.contacts import ContactsMixin, ContactSpec
 from pfaff.mechanics.elements import ElementsMixin
 from pfaff.mechanics.events import EventsMixin, EventSpec
 from pfaff.mechanics.family import Family, Ref, check_name, find_ref, index_range, member_index
@@ -101,7 +102,7 @@ def _slot_name(system: SystemSpec, slot: int | Ref) -> str:
     return f"Derivative({slot.family.name}[{slot.stride}*{slot.index} + {slot.shift}], t)"
 
 
-class SystemSpec(ElementsMixin, EventsMixin):
+class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin):
     """A constrained mechanical system as data: coordinates, pieces and their local forms.
 
     This is the model stage: every ``add_*`` method validates its piece when it is added. The
@@ -135,6 +136,8 @@ class SystemSpec(ElementsMixin, EventsMixin):
         self.bodies: list = []  # rigid bodies (add_rigid_body), in order
         self.inputs: list = []  # parameters declared as inputs (add_input)
         self.events: list[EventSpec] = []  # add_event, compiled with the model
+        self.contacts: list[ContactSpec] = []  # add_unilateral_constraint (derive/contacts)
+        self._defaults: dict[str, float] = {}  # set_parameter_defaults
 
     # ------------------------------------------------------------------ inspection helpers
     @property
@@ -204,6 +207,55 @@ class SystemSpec(ElementsMixin, EventsMixin):
     def parameters(self) -> tuple[sp.Symbol, ...]:
         """The free symbols of the model other than :data:`t`, sorted by name."""
         return tuple(sorted(self._parameters, key=lambda s: s.name))
+
+    @property
+    def parameter_defaults(self) -> dict[str, float]:
+        """Default values of parameters, by name (:meth:`set_parameter_defaults`), a copy."""
+        return dict(self._defaults)
+
+    def set_parameter_defaults(self, values: dict) -> None:
+        """Give parameters default values, used by ``compile()`` where no value is given.
+
+        Parameters
+        ----------
+        values : dict
+            Finite real numbers keyed by parameter (Symbol or name); each must be a parameter
+            of the system already. A later call adds to (and overrides) earlier ones.
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> s = pfaff.models.pendulum()
+        >>> s.set_parameter_defaults({"g": 9.81})
+        >>> s.parameter_defaults
+        {'g': 9.81}
+        >>> model = s.equations().compile({"m": 1, "L": 1})  # g = 9.81 from the default
+        >>> round(float(model.accelerations(0.0, [0.5], [0.0])[0][0]), 6)
+        -4.703165
+        """
+        if not isinstance(values, dict):
+            raise ModelError(
+                f"`values` must be a dict of parameter values; got {type(values).__name__}"
+            )
+        names = {p.name for p in self._parameters}
+        checked = {}
+        for key, value in values.items():
+            name = key.name if isinstance(key, sp.Symbol) else key
+            if not isinstance(name, str) or name not in names:
+                raise ModelError(
+                    f"`values`: {str(key)[:80]!r} is not a parameter of this system "
+                    f"(its parameters: {', '.join(sorted(names)) or 'none'})"
+                )
+            if isinstance(value, bool | str | bytes) or not isinstance(
+                value, int | float | np.number
+            ):
+                raise ModelError(f"`values[{name!r}]` must be a real number; got {value!r:.80}")
+            if not np.isfinite(value) or isinstance(value, np.complexfloating):
+                raise ModelError(
+                    f"`values[{name!r}]` must be a finite real number; got {value!r:.80}"
+                )
+            checked[name] = float(value)
+        self._defaults.update(checked)
 
     @property
     def constraints(self) -> list[Piece]:

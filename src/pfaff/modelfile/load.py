@@ -30,6 +30,8 @@ The format (see ``examples/`` and the README)::
     [[springs]]                # k, between = [[...], [...]], rest_length
     [[dampers]]                # c, between
     [[constraints]]            # name, and holonomic = "f(q, t)" or velocity = "A(q) dot(q) + b"
+    [[contacts]]               # gap = "g(q, t)" (>= 0), restitution (a number or expression), name
+    [[events]]                 # condition = "g(q, dot(q), t)", name, direction (-1, 0, 1), terminal
 
     [initial]
     q = { theta1 = 1.0 }       # a family takes a list of n values, or one value for all
@@ -72,13 +74,13 @@ from pfaff.mechanics.attitude import MRP, EulerAngles, PlanarAngle, Quaternion
 MAX_BYTES = 1 << 20  # 1 MB: a larger file is refused unless ``max_bytes`` is raised
 SECTIONS = {
     "model", "families", "particles", "bodies", "forces", "generalized_forces", "torques",
-    "springs", "dampers", "constraints", "initial", "simulate",
+    "springs", "dampers", "constraints", "contacts", "events", "initial", "simulate",
 }  # fmt: skip
 SIMULATE_KEYS = {
     "t_end": float, "method": str, "rtol": float, "atol": float, "integrator": str,
     "max_step": float, "first_step": float, "alpha": float, "beta": float,
     "constraint_tol": float, "initial_tol": float, "project_initial": bool,
-    "project_output": bool, "samples": int,
+    "project_output": bool, "samples": int, "rest_speed": float,
 }  # fmt: skip
 
 
@@ -332,6 +334,8 @@ class _Loader:
         self.bodies_(system)
         self.forces(system)
         self.constraints_(system)
+        self.contacts_(system)
+        self.events_(system)
         used = {s.name for s in system.parameters}
         undeclared = sorted(used - set(values))
         if undeclared:  # cannot happen through the parser; a guard against a future change
@@ -557,6 +561,29 @@ class _Loader:
             self.call(key, add, e, name, over=over)
             self.constraints.append(name)
 
+    def contacts_(self, system: System) -> None:
+        for i, c in enumerate(self.tables("contacts")):
+            key = f"contacts[{i}]"
+            self.keys(key, c, {"name", "gap", "restitution"}, {"gap"})
+            gap = self.expr(f"{key}.gap", c["gap"])
+            e = self.expr(f"{key}.restitution", c.get("restitution", 0))
+            self.call(key, system.add_unilateral_constraint, gap, self.name_of(key, c), e)
+
+    def events_(self, system: System) -> None:
+        for i, ev in enumerate(self.tables("events")):
+            key = f"events[{i}]"
+            self.keys(key, ev, {"name", "condition", "direction", "terminal"}, {"condition"})
+            cond = self.expr(f"{key}.condition", ev["condition"])
+            direction, terminal = ev.get("direction", 0), ev.get("terminal", False)
+            if isinstance(direction, bool) or direction not in (-1, 0, 1):
+                raise self.fail(f"{key}.direction", "must be -1 (falling), 0 (both) or 1 (rising)")
+            if not isinstance(terminal, bool | int) or (
+                not isinstance(terminal, bool) and not 0 <= terminal <= 1_000_000
+            ):
+                raise self.fail(f"{key}.terminal", "must be true, false or a count from 0")
+            name = self.name_of(key, ev)
+            self.call(key, system.add_event, cond, name, direction=direction, terminal=terminal)
+
     def initial(self, system: System) -> tuple[np.ndarray, np.ndarray]:
         init = self.table("initial", self.data.get("initial", {}))
         self.keys("initial", init, {"q", "qd"})
@@ -596,7 +623,7 @@ class _Loader:
             key = f"simulate.{k}"
             if kind is float:
                 out[k] = parse_number(v, self.where(key))
-                if k != "alpha" and k != "beta" and not out[k] > 0:
+                if k not in ("alpha", "beta", "rest_speed") and not out[k] > 0:
                     raise self.fail(key, f"must be positive, got {out[k]}")
             elif kind is bool:
                 if not isinstance(v, bool):

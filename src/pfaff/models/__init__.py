@@ -310,6 +310,17 @@ from pfaff.models.bodies import (  # noqa: E402, F401  (the rigid-body zoo)
     torque_free_body,
 )
 from pfaff.models.bricard import BRICARD, bricard, bricard_state  # noqa: E402, F401  (IFToMM A04)
+from pfaff.models.contacts import (  # noqa: E402, F401  (unilateral contacts)
+    bouncing_ball,
+    bouncing_ball_state,
+    particle_on_sphere,
+    particle_on_sphere_state,
+)
+from pfaff.models.damped import (  # noqa: E402, F401  (identification's test systems)
+    damped_double_pendulum,
+    damped_pendulum,
+    double_pendulum_cartesian_state,
+)
 from pfaff.models.diffdrive import diffdrive  # noqa: E402, F401  (a robot with a redundant row)
 from pfaff.models.fourbar3d import FOURBAR3D, fourbar3d, fourbar3d_state  # noqa: E402, F401
 from pfaff.models.robot import (  # noqa: E402, F401  (an n-joint spatial arm)

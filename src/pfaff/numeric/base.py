@@ -56,6 +56,7 @@ class StreamModel(Quantities, ModelValue):
         inputs: Sequence[str] = (),
         attitudes: Sequence[tuple[str, str, tuple[int, ...], str]] = (),
         events: Sequence[object] = (),
+        contacts: object = None,
         geometry: object = None,
         linearizer: object = None,
         restream: Callable | None = None,
@@ -80,6 +81,9 @@ class StreamModel(Quantities, ModelValue):
         # the events declared on the system (System.add_event), compiled: objects with name,
         # direction, terminal, fn(t, q, qd) and with_parameters(values) (pfaff.derive.events)
         self.events = tuple(events)
+        # the unilateral constraints (System.add_unilateral_constraint): None, or the models a
+        # contact run switches between (pfaff.derive.contacts.CompiledContacts)
+        self.contacts = contacts
         self.geometry = geometry  # what animations draw (pfaff.derive.geometry), or None
         # the linearization's kernel factory (pfaff.derive.linearize), or None
         self.linearizer = linearizer
@@ -89,6 +93,7 @@ class StreamModel(Quantities, ModelValue):
         self.timings: dict[str, float | str] = dict(timings or {})
 
     events: tuple = ()  # (a model pickled before events were carried)
+    contacts: object = None  # (likewise, before contacts)
     evaluator = "template"  # (general models choose theirs: pfaff.numeric.evaluator)
     mass_singular = False  # (a general model's run finds it at its first state)
 

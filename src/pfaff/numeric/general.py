@@ -238,6 +238,7 @@ class GeneralParts:
             fused=self._fused_kernel, evaluator=model.evaluator,
             machine_code=self._machine_code, inputs=model.inputs, attitudes=model.attitudes,
             events=tuple(e.with_parameters(parameters) for e in model.events),  # type: ignore[attr-defined]
+            contacts=model.contacts and model.contacts.with_parameters(parameters),  # type: ignore[attr-defined]
             geometry=geometry, linearizer=model.linearizer, restream=model._restream,
             timings=model.timings,
         )  # fmt: skip

@@ -32,9 +32,15 @@ class Trajectory:
     nc_work : ndarray, shape (k,)
         W_nc(t): the work done by the applied (non-conservative) forces since the start, ∫ Qᵀq̇ dt,
         integrated along the solution with the integrator's dense output.
+    contact_open : ndarray of bool, shape (k, m)
+        True on the rows of unilateral constraints that are open at that time (their
+        ``multipliers`` are 0 and ``constraint_residual[:, 0]`` holds the gap, not a residual).
+    impact_work : ndarray, shape (k,)
+        W_impact(t): the work of the impulses of the impacts so far (unilateral constraints,
+        ``System.add_unilateral_constraint``), ≤ 0 for a loss; zero without impacts.
     energy_balance : ndarray, shape (k,)
-        T + V − E₀ − W_nc(t): zero up to the integration error while ideal constraints do no
-        work (scleronomic constraints; a moving constraint's work shows here).
+        T + V − E₀ − W_nc(t) − W_impact(t): zero up to the integration error while ideal
+        constraints do no work (scleronomic constraints; a moving constraint's work shows here).
     constraint_residual : ndarray, shape (k, 2, m)
         ``[:, 0]`` position level f(q, t) (0 for velocity constraints), ``[:, 1]`` velocity level
         A q̇ + b.
@@ -48,8 +54,10 @@ class Trajectory:
         (t, body name) of every MRP shadow-set switch (empty without MRPs).
     events : list of EventRecord
         The events of the run in time order (:class:`pfaff.EventRecord`: name, t, q, q̇, kind):
-        the zero crossings of user events (``simulate(events=...)``, ``System.add_event``). Each
-        one's state is also a reported state (in ``t``, ``q``, ...).
+        the zero crossings of user events (``simulate(events=...)``, ``System.add_event``), and
+        the contacts' "impact", "rest" (closing without a bounce) and "release" (the multiplier
+        crossing zero), whose q̇ is the one after the event. A zero crossing's state is also a
+        reported state (in ``t``, ``q``, ...); at an impact two states share its time.
     redundant_rows : ndarray of int, shape (k,)
         Per reported time, how many constraint rows depend on the others (the dimension of
         the null space of Aᵀ): on those directions only Aᵀλ is determined, and ``multipliers``
@@ -74,6 +82,10 @@ class Trajectory:
         self.potential: np.ndarray = fields["potential"]
         self.jacobi: np.ndarray = fields["jacobi"]
         self.nc_work: np.ndarray = fields.get("nc_work", np.zeros(len(fields["t"])))
+        self.impact_work: np.ndarray = fields.get("impact_work", np.zeros(len(fields["t"])))
+        self.contact_open: np.ndarray = np.asarray(
+            fields.get("contact_open", np.zeros(self.multipliers.shape, dtype=bool)), dtype=bool
+        )
         self.constraint_residual: np.ndarray = fields["constraint_residual"]
         self.stats: dict = fields["stats"]
         self.status: str = fields["status"]
@@ -98,8 +110,9 @@ class Trajectory:
 
     @property
     def energy_balance(self) -> np.ndarray:
-        """T + V − E₀ − W_nc(t), shape (k,): the energy error once the work of the applied
-        forces is accounted for (the pushed ring gains F·Δx; this stays at rounding level).
+        """T + V − E₀ − W_nc(t) − W_impact(t), shape (k,): the energy error once the work of
+        the applied forces and of the impacts' impulses is accounted for (the pushed ring gains
+        F·Δx; this stays at rounding level).
 
         Examples
         --------
@@ -111,7 +124,7 @@ class Trajectory:
         (True, 1.0)
         """
         e = self.energy
-        return e - (e[0] if e.size else 0.0) - self.nc_work
+        return e - (e[0] if e.size else 0.0) - self.nc_work - self.impact_work
 
     @property
     def success(self) -> bool:
@@ -217,6 +230,8 @@ class Trajectory:
         pairs += [(name, self.multipliers[:, j]) for j, name in enumerate(self.multiplier_names)]
         pairs += [("T", self.kinetic), ("V", self.potential), ("energy", self.energy)]
         pairs += [("jacobi", self.jacobi), ("nc_work", self.nc_work)]
+        if self.impact_work.any():
+            pairs += [("impact_work", self.impact_work)]
         pairs += [("energy_balance", self.energy_balance)]
         for j, name in enumerate(self.multiplier_names):
             pairs += [(f"f_{name}", self.constraint_residual[:, 0, j])]
@@ -255,6 +270,7 @@ class Trajectory:
                 "energy": ("time", self.energy),
                 "jacobi": ("time", self.jacobi),
                 "nc_work": ("time", self.nc_work),
+                "impact_work": ("time", self.impact_work),
                 "energy_balance": ("time", self.energy_balance),
                 "constraint_residual": (("time", "level", "multiplier"), self.constraint_residual),
                 **self._event_variables(),

@@ -29,7 +29,7 @@ from pfaff.core.errors import OptionError, PfaffError
 from pfaff.modelfile import ModelFile, load_model
 from pfaff.sweep.grid import make_grid
 from pfaff.sweep.result import Results
-from pfaff.sweep.worker import SweepSpec, run_batch
+from pfaff.sweep.worker import SweepSpec, run_batch, with_contacts
 
 TASK_SECONDS = 0.1  # shortest task (Dask's overhead is ~1 ms per task)
 LONGEST_TASK = 2.0  # longest task aimed at when the sweep is large (load balance, progress)
@@ -233,11 +233,12 @@ def _names_of(mf: ModelFile) -> dict[str, list[str]]:
     """Coordinate, multiplier and constraint names from the derivation (every run failed
     before its model was compiled: the workers had none to report)."""
     eom = mf.system.equations()
-    return {
+    names = {
         "coordinate_names": [str(q.func) for q in eom.coordinates],
         "multiplier_names": [str(s) for s in eom.multipliers],
         "constraint_names": list(eom.constraint_names),
     }
+    return with_contacts(names, [c.name for c in mf.system.contacts])
 
 
 def _execute(

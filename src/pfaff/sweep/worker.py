@@ -18,6 +18,7 @@ import tempfile
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -182,13 +183,15 @@ def run_batch(spec: SweepSpec, indices: list[int]) -> dict[str, Any]:
                 continue
             if lam is None:
                 lam = np.full((k, s, traj.multipliers.shape[1]), np.nan)
-            rows = _rows(spec.t_eval, traj.t)
-            q[j, rows], qd[j, rows], lam[j, rows] = traj.q, traj.qd, traj.multipliers
+            keep = np.isin(traj.t, spec.t_eval)  # not the states of events between samples
+            rows = _rows(spec.t_eval, traj.t[keep])
+            q[j, rows], qd[j, rows] = traj.q[keep], traj.qd[keep]
+            lam[j, rows] = traj.multipliers[keep]
             if len(traj.t):
                 out["energy_error"][j] = float(np.abs(traj.energy_balance).max())
-                out["constraint_residual"][j] = float(
-                    np.abs(traj.constraint_residual).max(initial=0.0)
-                )
+                res = np.abs(traj.constraint_residual)
+                res[:, 0][traj.contact_open] = 0.0  # an open contact's gap is no residual
+                out["constraint_residual"][j] = float(res.max(initial=0.0))
         if entry.base is not None:
             names = _names(entry.base)
     out.update(q=q, qd=qd, multipliers=lam, **names)
@@ -222,8 +225,18 @@ def _rows(t_eval: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _names(model: Any) -> dict[str, list[str]]:
-    return {
+    names = {
         "coordinate_names": list(model.coordinate_names),
         "multiplier_names": list(model.multiplier_names),
         "constraint_names": list(model.constraint_names),
     }
+    return with_contacts(names, getattr(getattr(model, "contacts", None), "names", ()))
+
+
+def with_contacts(names: dict[str, list[str]], contacts: Sequence[str]) -> dict[str, list[str]]:
+    """``names`` with one multiplier and constraint row per unilateral constraint (named in
+    ``contacts``), after the bilateral ones: the columns of a contact run's multipliers."""
+    for c in contacts:
+        names["multiplier_names"].append(f"lambda{len(names['multiplier_names']) + 1}")
+        names["constraint_names"].append(c)
+    return names
