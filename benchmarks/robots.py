@@ -20,7 +20,8 @@ Interleaved (pfaff, kane, pfaff, kane, …), ``--repeats`` times, medians; the r
 
 (ii) **one right-hand side** q̈(q, q̇) at a random state, in µs (``timeit``, median of 7
 interleaved rounds): pfaff's ``model.accelerations`` (checked, the user's call) and its
-integrator right-hand side ``model.ode_function()`` when it has one, Pinocchio's ``aba``
+integrator right-hand side ``model.ode_function()`` with the default evaluator and with machine
+code (``compile(..., evaluator="machine")``), Pinocchio's ``aba``
 (``buildModelFromXML`` of the same text), MuJoCo's ``mj_forward`` (``MjModel.from_xml_string`` of
 the same text: qpos, qvel set, q̈ read from ``qacc``), each with the largest |q̈ − Pinocchio| at
 that state.
@@ -29,6 +30,7 @@ Run (from the project root; needs the ``bench`` extra: ``pip install -e .[bench]
 
     python benchmarks/robots.py                 # n = 3, 6, 12
     python benchmarks/robots.py --n 3 6 --repeats 3
+    python benchmarks/robots.py --rhs-only      # (ii) alone
 """
 
 from __future__ import annotations
@@ -196,12 +198,15 @@ def rhs_table(n: int, rounds: int = 7) -> list[tuple[str, float, float]]:
     with open(path, "w") as f:
         f.write(text)
     system = pfaff.load_urdf(path)
-    model = system.equations().compile(system.urdf_values)
-    ode = model.ode_function()
+    eom = system.equations()
+    model = eom.compile(system.urdf_values)
+    machine = eom.compile(system.urdf_values, evaluator="machine")
+    ode, ode_machine = model.ode_function(), machine.ode_function()
     y = np.concatenate([q, qd])
     calls = {
         "pfaff accelerations": lambda: model.accelerations(0.0, q, qd)[0],
-        "pfaff ode_function": lambda: np.asarray(ode(0.0, y))[n : 2 * n],
+        f"pfaff ode ({model.evaluator})": lambda: np.asarray(ode(0.0, y))[n : 2 * n],
+        "pfaff ode (machine)": lambda: np.asarray(ode_machine(0.0, y))[n : 2 * n],
         "pinocchio aba": lambda: aba(q, qd),
         "mujoco mj_forward": lambda: mj(q, qd),
     }
@@ -225,11 +230,22 @@ def main() -> None:
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--timeout", type=float, default=600.0)
     p.add_argument("--child", choices=["pfaff", "kane"])
+    p.add_argument("--rhs-only", action="store_true", help="only (ii), the right-hand sides")
     args = p.parse_args()
     if args.child:
         print(json.dumps(child(args.child, args.n[0])))
         return
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs\n")
+    if not args.rhs_only:
+        first_qdd(args)
+    print("\n(ii) one right-hand side, µs (median of 7 interleaved rounds), max |qdd - pinocchio|")
+    for n in args.n:
+        for name, us, err in rhs_table(n):
+            print(f"{n:>3} {name:<22} {us:>9.1f} {err:>10.1e}")
+
+
+def first_qdd(args: argparse.Namespace) -> None:
+    """Table (i)."""
     print("(i) model -> first qdd, cold process, wall s (medians)")
     print(f"{'n':>3} {'pfaff':>9} {'kane':>9} {'kane/pfaff':>11} {'max|dqdd|':>10}")
     for n in args.n:
@@ -247,10 +263,6 @@ def main() -> None:
             print(f"{n:>3} {pf:>9.2f} {kn:>9.2f} {kn / pf:>11.1f} {diff:>10.1e}")
         else:
             print(f"{n:>3} {pf:>9.2f} {'>' + format(args.timeout, '.0f'):>9} {'-':>11} {'-':>10}")
-    print("\n(ii) one right-hand side, µs (median of 7 interleaved rounds), max |qdd - pinocchio|")
-    for n in args.n:
-        for name, us, err in rhs_table(n):
-            print(f"{n:>3} {name:<22} {us:>9.1f} {err:>10.1e}")
 
 
 if __name__ == "__main__":
