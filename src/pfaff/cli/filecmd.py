@@ -1,10 +1,12 @@
-"""``pfaff equations MODEL.toml`` and ``pfaff run MODEL.toml``: the CLI on a model file."""
+"""``pfaff equations MODEL.toml`` and ``pfaff run MODEL.toml``: the CLI on a model file (or a
+URDF robot, ``pfaff run robot.urdf --t-end T --q0 joint=value``)."""
 
 from __future__ import annotations
 
 import argparse
 import time
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -23,7 +25,7 @@ def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
     from pfaff.integrate.simulation import METHODS
 
     eq = sub.add_parser("equations", help="derive and print the equations of a model file")
-    eq.add_argument("model", metavar="MODEL.toml", help="the model file")
+    eq.add_argument("model", metavar="MODEL.toml", help="the model file (or a URDF file)")
     eq.add_argument("--latex", action="store_true", help="print LaTeX (default: text)")
     eq.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
     eq.add_argument(
@@ -31,7 +33,7 @@ def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
     )
     common(eq)
     run = sub.add_parser("run", help="simulate a model file")
-    run.add_argument("model", metavar="MODEL.toml", help="the model file")
+    run.add_argument("model", metavar="MODEL.toml", help="the model file (or a URDF file)")
     run.add_argument(
         "--t-end", type=positive, help="end time (default: the file's [simulate] t_end)"
     )
@@ -71,6 +73,12 @@ def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
         default=200,
         help="animation frames (default: 200)",
     )
+    run.add_argument(
+        "--q0",
+        nargs="+",
+        metavar="NAME=VALUE",
+        help="initial coordinates by name (default: the file's [initial]; a URDF file's joints: q0 = q̇0 = 0)",
+    )
     run.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
     run.add_argument(
         "--max-bytes", type=whole(1), default=None, help="the file-size cap (default: 1 MB)"
@@ -79,11 +87,51 @@ def add_parsers(sub: argparse._SubParsersAction, common: Any) -> None:
 
 
 def _load(args: argparse.Namespace) -> Any:
+    """The model file, or a URDF file (``*.urdf``) as one: its values, q0 = q̇0 = 0, no
+    [simulate] settings; ``--q0 name=value`` (``run``) sets initial angles by joint name."""
     from pfaff.modelfile import load_model
 
-    kw = {} if args.max_bytes is None else {"max_bytes": args.max_bytes}
     stage("loading")
-    return load_model(args.model, **kw)
+    if not str(args.model).lower().endswith(".urdf"):
+        kw = {} if args.max_bytes is None else {"max_bytes": args.max_bytes}
+        return _initial(load_model(args.model, **kw), getattr(args, "q0", None), {})
+    from pfaff.core.errors import OptionError
+    from pfaff.modelfile.load import ModelFile
+    from pfaff.modelfile.urdf import MAX_BYTES, load_urdf
+
+    if args.max_bytes is not None:
+        raise OptionError(f"`--max-bytes` is for model files; a URDF file may have {MAX_BYTES}")
+    system = load_urdf(args.model)
+    zeros = np.zeros(system.n)
+    path = Path(args.model)
+    name = system.urdf_name or path.stem
+    mf = ModelFile(path, name, system, dict(system.urdf_values), zeros, zeros.copy())
+    joints = {jn: str(q.func) for jn, q in system.urdf_coordinates.items()}
+    return _initial(mf, getattr(args, "q0", None), joints)
+
+
+def _initial(mf: Any, pairs: list[str] | None, aliases: dict[str, str]) -> Any:
+    """``mf`` with the initial coordinates ``name=value`` of ``--q0`` (a name: a coordinate, or
+    a URDF joint in ``aliases``); the value a finite number, never evaluated."""
+    from pfaff.core.errors import OptionError
+
+    names = [str(q.func) for q in mf.system.coordinates]
+    for pair in pairs or []:
+        name, sep, text = pair.partition("=")
+        name = aliases.get(name.strip(), name.strip())
+        if not sep or name not in names:
+            raise OptionError(
+                f"`--q0 {pair[:60]}`: expected name=value with a coordinate name "
+                f"({', '.join([*aliases, *names][:20])})"
+            )
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        if not np.isfinite(value):
+            raise OptionError(f"`--q0 {pair[:60]}`: the value must be a finite number")
+        mf.q0[names.index(name)] = value
+    return mf
 
 
 def run_equations(args: argparse.Namespace) -> int:

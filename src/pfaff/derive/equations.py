@@ -7,6 +7,7 @@ the bias from them on demand. The user sees it as :class:`pfaff.EquationsOfMotio
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -16,7 +17,7 @@ import sympy as sp
 
 from pfaff.core.errors import ConstraintError, PfaffError
 from pfaff.core.lazy import LazySeq
-from pfaff.core.symbols import accel, local_q, local_qd, speed
+from pfaff.core.symbols import accel, local_q, local_qd, speed, t
 from pfaff.derive.blocks import Block, Local
 from pfaff.derive.latexlist import EquationList, vlatex
 
@@ -29,6 +30,16 @@ SYMBOLIC_LIMIT = 100_000  # largest n for symbolic matrices (the templates are d
 
 
 _TRIG = (sp.sin, sp.cos, sp.tan)
+READABLE_NODES = 500  # no entry of at most 80 operations has more nodes: a cheap first bound
+READABLE_ANGLES = 2  # Fu's rules and trigsimp on 3 angles: 1-20 s per entry of a 6-joint arm
+READABLE_SYMBOLS = 5  # angles + parameters: Fu's factoring took 1-5 s per arm entry of 6, for
+# nothing (a link's mass, centre and inertia entries are 10 parameters)
+
+
+def bounded_nodes(e: sp.Expr, limit: int) -> int:
+    """The number of nodes of ``e``, counting at most ``limit + 1`` (a bounded walk, where
+    ``count_ops`` walks the whole tree: seconds for an arm's entries of 10⁵ operations)."""
+    return sum(1 for _ in itertools.islice(sp.preorder_traversal(e), limit + 1))
 
 
 def readable_form(e: sp.Expr) -> sp.Expr:
@@ -36,7 +47,10 @@ def readable_form(e: sp.Expr) -> sp.Expr:
 
     Bounded: ``trigsimp`` costs about a second on 60 operations with two angles, so bigger
     expressions go through Fu's rules first and ``trigsimp`` sees only what they left, when it
-    is small; over 80 operations an entry is shown as derived. Applied per template when a
+    is small; over 80 operations, over two angles or over five angles and parameters together
+    an entry is shown as derived (Fu's rules took 20 s on one 75-operation entry of three angles
+    of a 6-joint arm, and 1-5 s on entries of two angles and four parameters, and left them as
+    they were). Applied per template when a
     readable property is first read, never on the way to numbers (``compile``).
 
     Examples
@@ -45,10 +59,12 @@ def readable_form(e: sp.Expr) -> sp.Expr:
     >>> readable_form(sp.sin(a) * sp.sin(b) + sp.cos(a) * sp.cos(b))
     cos(a - b)
     """
-    if not e.has(*_TRIG):
+    if not e.has(*_TRIG) or bounded_nodes(e, READABLE_NODES) > READABLE_NODES:
         return e
     n = sp.count_ops(e)
-    if n > 80:
+    angles = {f.args[0] for f in e.atoms(*_TRIG)}
+    symbols = {s for s in e.free_symbols if not s.name.startswith("_q")} - {t}
+    if n > 80 or len(angles) > READABLE_ANGLES or len(angles) + len(symbols) > READABLE_SYMBOLS:
         return e
     s = e if n <= 24 else sp.fu(e)
     if sp.count_ops(s) <= 24:
@@ -225,7 +241,13 @@ class Derivation:
         key = (id(block), attr)
         cache = self._readable_cache
         if key not in cache:
-            cache[key] = {k: readable_form(e) for k, e in entries.items()}
+            # one simplification per distinct entry: a link's rows of parallel joint axes repeat
+            # (six equal entries of the UR-type arm's wrist)
+            forms = cache.setdefault("forms", {})
+            cache[key] = {
+                k: forms[e] if e in forms else forms.setdefault(e, readable_form(e))
+                for k, e in entries.items()
+            }
         return cache[key]
 
     @cached_property

@@ -418,7 +418,7 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
     system = getattr(eom, "system", None)
     pieces = [p for p in getattr(system, "pieces", ()) if p.kind == "particle"]
     shapes = list(getattr(system, "shapes", ()))
-    if system is None or not (pieces or shapes):
+    if system is None or not (pieces or shapes or system.bodies):
         return None
     pieces += [p for p in system.pieces if p.kind == "force" and p.template is None]
     groups: dict[tuple, _Group] = {}
@@ -441,7 +441,7 @@ def build_geometry(eom: Derivation, values: Sequence[float]) -> Geometry | None:
             kinds += ["family"] * len(ks)
             families.append((piece.name, start, len(names)))
     dims = [len(g.exprs) for g in groups.values()] + [s.position.rows for s in shapes]
-    dim = max(dims)
+    dim = max(dims, default=3)  # bodies alone: spatial
     solids = [*system.bodies, *shapes]
     bodies = [_body(system, body, dim) for body in solids]
     linkable = sum(k != "family" for k in kinds)

@@ -12,7 +12,6 @@ differentiated or simplified at the size of the whole system.
 
 from __future__ import annotations
 
-import itertools
 import time
 
 import numpy as np
@@ -22,7 +21,7 @@ from pfaff.core.errors import ModelError
 from pfaff.core.symbols import local_q, local_qd, t
 from pfaff.derive.blocks import Block, LazyEntries, Local
 from pfaff.derive.engine import Engine, Plain, algebra
-from pfaff.derive.equations import Derivation
+from pfaff.derive.equations import Derivation, bounded_nodes
 from pfaff.derive.memory import check_memory
 from pfaff.derive.rank import check_constraint_rank
 from pfaff.mechanics.system import Piece, SystemSpec
@@ -42,7 +41,7 @@ def _tidy(e: sp.Expr) -> sp.Expr:
     """
     if not e.has(sp.sin):
         return e
-    n = _nodes(e, TIDY_NODES)
+    n = bounded_nodes(e, TIDY_NODES)
     if n > TIDY_NODES:
         return e
     rep = {
@@ -53,12 +52,7 @@ def _tidy(e: sp.Expr) -> sp.Expr:
     if not rep:
         return e
     s = sp.expand(e.xreplace(rep))
-    return s if _nodes(s, n + 1) <= n else e
-
-
-def _nodes(e: sp.Expr, limit: int) -> int:
-    """The number of nodes of ``e``, counting at most ``limit + 1``."""
-    return sum(1 for _ in itertools.islice(sp.preorder_traversal(e), limit + 1))
+    return s if bounded_nodes(s, n + 1) <= n else e
 
 
 def _qs(k: int) -> tuple[list[sp.Symbol], list[sp.Symbol]]:

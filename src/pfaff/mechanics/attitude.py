@@ -29,6 +29,7 @@ __all__ = [
 
 SEQUENCES = ("121", "123", "131", "132", "212", "213", "231", "232", "312", "313", "321", "323")
 TIDY_OPS = 600  # a Rotation's ω entries with more operations are left unsimplified
+TIDY_ANGLES = 2  # nor do Fu's rules see entries of more angles (seconds each, for nothing)
 SINGULAR_TOL = 1e-10  # |singularity| below this: the kinematic matrix is treated as singular
 
 
@@ -409,8 +410,28 @@ class PlanarAngle(Attitude):
 
 
 def _tidy(e: sp.Expr) -> sp.Expr:
-    """Fu's trigonometric rules (sin² + cos², angle sums) on an entry small enough for them."""
-    return sp.fu(e) if sp.count_ops(e) <= TIDY_OPS else e
+    """sin² + cos² = 1 exactly, then Fu's rules (angle sums) on an entry small enough for them.
+
+    First the normal form of a polynomial in sines and cosines: each sin(u)^k with k ≥ 2
+    becomes sin(u)^(k-2) (1 − cos²u), expanded, until none is left, which cancels every
+    sin² + cos² (a chain of three joints: ω's entries in milliseconds where Fu's rules took
+    seconds each). Fu's rules then see only entries of at most ``TIDY_ANGLES`` angles.
+    """
+    for _ in range(8):
+        rep = {
+            p: p.base ** (p.exp - 2) * (1 - sp.cos(p.base.args[0]) ** 2)
+            for p in e.atoms(sp.Pow)
+            if p.base.func is sp.sin and p.exp.is_Integer and p.exp >= 2
+        }
+        if not rep:
+            break
+        e = sp.expand(e.xreplace(rep))
+    if (
+        sp.count_ops(e) > TIDY_OPS
+        or len({f.args[0] for f in e.atoms(sp.sin, sp.cos)}) > TIDY_ANGLES
+    ):
+        return e
+    return sp.fu(e)
 
 
 class Rotation(Attitude):
@@ -446,6 +467,11 @@ class Rotation(Attitude):
     """
 
     kind = "rotation"
+    #: Body components of the body's mass-centre velocity when whoever made C knows them (a
+    #: chain built joint by joint, :func:`pfaff.load_urdf`): ``add_rigid_body`` then adds the
+    #: translation as the kinetic energy ½ m |v|² in body axes, not as a particle at the
+    #: inertial position (the same T; M entries without the rotations of the joints above).
+    centre_velocity: sp.Matrix | None = None
 
     def __init__(self, dcm: object, source: str = "") -> None:
         if not isinstance(dcm, sp.MatrixBase | list | tuple | np.ndarray):

@@ -22,6 +22,21 @@ if TYPE_CHECKING:
     from pfaff.mechanics.system import SystemSpec
 
 
+def quadratic_form(inertia: sp.Matrix, w: sp.Matrix) -> sp.Expr:
+    """½ ωᵀ I ω as Σ_c I_cc ω_c²/2 + Σ_{c<d} I_cd ω_c ω_d, unexpanded: its second derivatives in
+    q̇ are then the compact Σ I_cd (∂ω_c/∂q̇_a)(∂ω_d/∂q̇_b) (no halves, no expanded products).
+
+    Examples
+    --------
+    >>> a, b, c = sp.symbols("a b c")
+    >>> quadratic_form(sp.Matrix([[2, 1, 0], [1, 4, 0], [0, 0, 6]]), sp.Matrix([a, b, c]))
+    a**2 + a*b + 2*b**2 + 3*c**2
+    """
+    terms = [inertia[i, i] / 2 * w[i] ** 2 for i in range(3)]
+    terms += [inertia[i, j] * w[i] * w[j] for i in range(3) for j in range(i + 1, 3)]
+    return sp.Add(*terms)
+
+
 class ElementsMixin:
     """Rigid bodies, torques, springs, dampers and Rayleigh dissipation (a part of SystemSpec)."""
 
@@ -97,9 +112,16 @@ class ElementsMixin:
         inertia_c = inertia_matrix(inertia, attitude, f"inertia of {what}")
         self._parameters.update(inertia_c.free_symbols)
         body = Body(label, m, inertia_c, r, attitude)
-        self.add_particle(m, list(r), name=label)  # the translation: m JᵀJ
         w = attitude.angular_velocity
-        rot = sp.expand((w.T * inertia_c * w)[0, 0] / 2)
+        v = getattr(attitude, "centre_velocity", None)
+        if v is None:
+            self.add_particle(m, list(r), name=label)  # the translation: m JᵀJ
+            rot = sp.expand((w.T * inertia_c * w)[0, 0] / 2)
+        else:  # a chain's link: both halves in body components, unexpanded (compact M entries)
+            m = self._mass(m, what)
+            self._scan(tuple(r), f"position of {what}", speeds=False)  # its parameters count
+            self.add_kinetic_energy(m * sp.Add(*(vc**2 / 2 for vc in v)), name=label)
+            rot = quadratic_form(inertia_c, w)
         if rot != 0:
             self.add_kinetic_energy(rot, name=f"{label} rotation")
         if attitude.constraint is not None:

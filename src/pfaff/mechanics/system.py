@@ -494,15 +494,20 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin, ShapesMixin):
         Matrix([[1]])
         """
         label = self._label(name, "particle")
-        m = as_expr(mass, f"mass of particle `{label}`")
+        m = self._mass(mass, f"particle `{label}`")
         r = self._vector(position, f"position of particle `{label}`", frame)
-        if self._scan((m,), f"mass of particle `{label}`", speeds=False) or m.has(t):
-            raise ModelError(f"mass of particle `{label}` must be constant, got {m}")
-        if m.is_number and not m.is_positive:
-            raise ModelError(f"mass of particle `{label}` must be positive, got {m}")
         refs = self._refs(over)
         coords = self._scan(r, f"position of particle `{label}`", speeds=False, refs=refs)
         self._add("particle", (m, *r), coords, label, len(r), over)
+
+    def _mass(self, mass: object, what: str) -> sp.Expr:
+        """A constant, positive mass (parameters only, no coordinates)."""
+        m = as_expr(mass, f"mass of {what}")
+        if self._scan((m,), f"mass of {what}", speeds=False) or m.has(t):
+            raise ModelError(f"mass of {what} must be constant, got {m}")
+        if m.is_number and not m.is_positive:
+            raise ModelError(f"mass of {what} must be positive, got {m}")
+        return m
 
     @checked_keywords
     def add_kinetic_energy(

@@ -451,10 +451,11 @@ def _build(robot: _Robot, fixed_base: bool) -> System:
     poses: dict[str, tuple[sp.Matrix, sp.Matrix]] = {}
     base_q: list = []
     if fixed_base:
-        poses[robot.root] = (sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1))
+        poses[robot.root] = (sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1))
     else:
         base_q, rot, pos = _euler_base(robot.root, taken)
-        poses[robot.root] = (rot, pos, _euler_omega(base_q[3:]))
+        vel = rot.T * sp.Matrix([p.diff(t) for p in pos])
+        poses[robot.root] = (rot, pos, _euler_omega(base_q[3:]), vel)
     for jn in robot.order:
         poses[robot.joints[jn].child] = _child_pose(robot.joints[jn], poses, coords.get(jn))
     if not coords and not base_q:
@@ -464,14 +465,14 @@ def _build(robot: _Robot, fixed_base: bool) -> System:
     values: dict[str, float] = {"gravity": GRAVITY}
     prefixes: dict[str, str] = {}
     for name, link in robot.links.items():
-        rot, pos, omega = poses[name]
+        rot, pos, omega, vel = poses[name]
         moves = any(e.has(t) for e in (*rot, *pos))
         if link.inertial is None or link.inertial.mass == 0 or not moves:
             continue
         prefix = identifier(name, taken)
         prefixes[name] = prefix
         attitude = _ChainRotation(rot, omega, source=f"link `{name}`")
-        _add_link(system, link, prefix, attitude, pos, gravity, values)
+        _add_link(system, link, prefix, (attitude, pos, vel), gravity, values)
     for jn, q in coords.items():
         joint = robot.joints[jn]
         if joint.damping > 0:
@@ -492,7 +493,8 @@ def _build(robot: _Robot, fixed_base: bool) -> System:
 class _ChainRotation(Rotation):
     """A link frame's Rotation whose body angular velocity is known from the chain,
     ω_child = R_jᵀ ω_parent + a q̇ (R_j the joint's turn, a its unit axis), instead of being
-    derived from CᵀĊ: the same vector, without differentiating a product of many rotations."""
+    derived from CᵀĊ: the same vector, without differentiating a product of many rotations.
+    ``centre_velocity`` (body components) is set once the link's mass centre is known."""
 
     def __init__(self, dcm: sp.Matrix, omega: sp.Matrix, source: str = "") -> None:
         self._chain_omega = omega
@@ -503,30 +505,38 @@ class _ChainRotation(Rotation):
 
 
 def _child_pose(joint: _Joint, poses: dict, q: sp.Expr | None) -> tuple:
-    """The child link frame (C, origin, body angular velocity) in inertial components."""
-    rot_p, pos_p, omega_p = poses[joint.parent]
+    """The child link frame: C and origin (inertial components), body angular velocity and
+    origin velocity (child-frame components), each from the parent's, unexpanded:
+    ω = Rᵀ ω_p + a q̇, v = Rᵀ (v_p + ω_p × p) (+ a q̇ for a prismatic joint), R the joint's
+    turn, p its offset in the parent frame, a its unit axis."""
+    rot_p, pos_p, omega_p, vel_p = poses[joint.parent]
     turn = _rpy(joint.rpy)
-    pos = pos_p + rot_p * sp.Matrix([_number(v) for v in joint.xyz])
+    offset = sp.Matrix([_number(v) for v in joint.xyz])
+    pos = pos_p + rot_p * offset
     axis = _unit(joint.axis)
     omega = turn.T * omega_p
+    vel = turn.T * (vel_p + omega_p.cross(offset))
     if joint.kind in ("revolute", "continuous"):
         spin = _about(axis, q)
         turn = turn * spin
         omega = spin.T * omega + axis * q.diff(t)
+        vel = spin.T * vel
     elif joint.kind == "prismatic":
         pos = pos + rot_p * turn * axis * q
-    return rot_p * turn, pos, omega.applyfunc(sp.expand)
+        vel = vel + axis * q.diff(t)
+    return rot_p * turn, pos, omega, vel
 
 
 def _add_link(
     system: System,
     link: _Link,
     prefix: str,
-    attitude: Rotation,
-    pos: sp.Matrix,
+    frame: tuple[_ChainRotation, sp.Matrix, sp.Matrix],
     gravity: sp.Symbol,
     values: dict,
 ) -> None:
+    """The link's body (``frame``: its Rotation, origin and origin velocity) and its weight."""
+    attitude, pos, vel = frame
     ine = link.inertial
     mass = sp.Symbol(f"{prefix}.mass")
     com = sp.Matrix([sp.Symbol(f"{prefix}.com_{a}") for a in "xyz"])
@@ -544,6 +554,7 @@ def _add_link(
     if any(ine.rpy):
         r_in = _rpy(ine.rpy)
         inertia = (r_in * inertia * r_in.T).applyfunc(sp.expand)
+    attitude.centre_velocity = vel + attitude.angular_velocity.cross(com)
     centre = pos + sp.Matrix(attitude.dcm) * com
     system.add_rigid_body(mass, inertia, list(centre), attitude, name=link.name)
     system.add_potential_energy(mass * gravity * centre[2], name=f"{link.name} gravity")

@@ -324,3 +324,9 @@ from pfaff.models.damped import (  # noqa: E402, F401  (identification's test sy
 from pfaff.models.diffdrive import diffdrive  # noqa: E402, F401  (a robot with a redundant row)
 from pfaff.models.fourbar import FOURBAR, parallelogram_fourbar  # noqa: E402, F401  (the folds)
 from pfaff.models.fourbar3d import FOURBAR3D, fourbar3d, fourbar3d_state  # noqa: E402, F401
+from pfaff.models.robot import (  # noqa: E402, F401  (an n-joint spatial arm)
+    robot_arm,
+    robot_arm_state,
+    robot_arm_urdf,
+    robot_arm_values,
+)

@@ -44,9 +44,26 @@ class CheckedGeneral:
     def mass_matrix(
         self, t: float, q: object, qd: object | None = None
     ) -> np.ndarray | sps.csr_matrix:
-        """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix."""
-        M = super().mass_matrix(t, q, qd)  # type: ignore[misc]
-        return M.toarray() if self.dense else M
+        """M(q, t), shape (n, n): a dense array when small, else a SciPy CSR matrix.
+
+        With a fused kernel, from it (the template kernels, made on first use, took a minute
+        for a 7-joint arm's entries)."""
+        if self._fused is None:
+            M = super().mass_matrix(t, q, qd)  # type: ignore[misc]
+            return M.toarray() if self.dense else M
+        t, q, qd = self._state(t, q, np.zeros(self.n) if qd is None else qd)
+        M = self._kkt(t, q, qd)[0][: self.n, : self.n]
+        check_finite(t, "M", M)
+        return M if self.dense else sps.csr_matrix(M)
+
+    def forcing(self, t: float, q: object, qd: object) -> np.ndarray:
+        """Q - h, shape (n,) (from the fused kernel when the model has one)."""
+        if self._fused is None:
+            return super().forcing(t, q, qd)  # type: ignore[misc]
+        t, q, qd = self._state(t, q, qd)
+        out = np.array(self._kkt(t, q, qd)[1])
+        check_finite(t, "Q - h", out)
+        return out
 
     def constraint_matrix(self, t: float, q: object) -> np.ndarray | sps.csr_matrix:
         """A(q, t), shape (m, n): dense when small, else CSR."""

@@ -38,6 +38,7 @@ LONGEST_TASK = 2.0  # longest task aimed at when the sweep is large (load balanc
 TASKS_PER_WORKER = 4
 SAMPLES = 201
 SYNC = ("synchronous", "sync")
+ALONE_TRIES = 2  # a suspect run alone on the cluster: failed only if its workers die this often
 
 
 @checked_keywords
@@ -327,7 +328,10 @@ def _distributed(client: Any, spec: SweepSpec, results: Results, bar: Any) -> di
             for b in _chunks(range(len(probe), n), batch):
                 submit(b)
     for i in suspects:  # alone: no other task dies with its worker
-        out = _result(client.submit(run_batch, spec, [i], pure=False), client, {})
+        for _ in range(ALONE_TRIES):  # (a worker still restarting can take a good run down)
+            out = _result(client.submit(run_batch, spec, [i], pure=False), client, {})
+            if out is not None:
+                break
         if out is None:
             results.fail([i], "its worker process died each time it ran (a crash of Python)")
             bar.update(1)
