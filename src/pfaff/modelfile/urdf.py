@@ -92,7 +92,13 @@ class _Robot:
 
 
 @checked_keywords
-def load_urdf(path: str | os.PathLike, fixed_base: bool = True) -> System:
+def load_urdf(
+    path: str | os.PathLike,
+    fixed_base: bool = True,
+    *,
+    enforce_limits: bool = False,
+    restitution: float = 0.0,
+) -> System:
     """Read a URDF file into a :class:`pfaff.System`.
 
     Parameters
@@ -104,12 +110,18 @@ def load_urdf(path: str | os.PathLike, fixed_base: bool = True) -> System:
         ``<root>_x``, ``<root>_y``, ``<root>_z`` (position of its frame) and ``<root>_roll``,
         ``<root>_pitch``, ``<root>_yaw`` (C = Rz(yaw) Ry(pitch) Rx(roll); singular at
         pitch = ±π/2).
+    enforce_limits : bool
+        True: each joint limit becomes two unilateral constraints (``"<joint> lower"``
+        q − lower ≥ 0 and ``"<joint> upper"`` upper − q ≥ 0; see
+        :meth:`pfaff.System.add_unilateral_constraint`): the joint stops there, with an impact.
+    restitution : float
+        Newton's e of those stops, in [0, 1] (default 0: a stop that does not bounce).
 
     Returns
     -------
     System
         With the attributes ``urdf_values`` (dict: parameter name → the file's value, and
-        ``gravity``), ``urdf_coordinates`` (dict: joint name → coordinate, in the system's
+        ``gravity``; also the parameters' defaults, so ``compile()`` needs no values), ``urdf_coordinates`` (dict: joint name → coordinate, in the system's
         order), ``urdf_links`` (dict: link name → the prefix of its parameter names),
         ``joint_limits`` (dict: joint name → (lower, upper), revolute and prismatic joints) and
         ``urdf_name`` (the robot's name).
@@ -135,14 +147,35 @@ def load_urdf(path: str | os.PathLike, fixed_base: bool = True) -> System:
     >>> round(float(model.accelerations(0.0, [0.5], [0.0])[0][0]), 6)  # -g sin(q) / L
     -4.703165
     """
-    if not isinstance(fixed_base, bool):
-        raise ModelError(f"`fixed_base` must be True or False, got {fixed_base!r:.40}")
+    for arg, flag in (("fixed_base", fixed_base), ("enforce_limits", enforce_limits)):
+        if not isinstance(flag, bool):
+            raise ModelError(f"`{arg}` must be True or False, got {flag!r:.40}")
+    if isinstance(restitution, bool) or not isinstance(restitution, int | float):
+        raise ModelError(f"`restitution` must be a number in [0, 1], got {restitution!r:.40}")
+    if not 0.0 <= restitution <= 1.0:
+        raise ModelError(f"`restitution` must be in [0, 1], got {restitution!r:.40}")
     source = str(path)
     robot = parse_urdf(_read(path), source)
     try:
-        return _build(robot, fixed_base)
+        system = _build(robot, fixed_base)
+        if enforce_limits:
+            _stops(system, float(restitution))
     except ModelError as e:
         raise ModelError(f"{source}: {e}") from e
+    return system
+
+
+def _stops(system: System, restitution: float) -> None:
+    """The joint limits as unilateral constraints (``enforce_limits=True``)."""
+    for joint, (lower, upper) in system.joint_limits.items():
+        if not lower < upper:
+            raise ModelError(
+                f"joint `{joint}`: its limits ({lower:g}, {upper:g}) leave it no room to move: "
+                "enforce_limits needs lower < upper"
+            )
+        q = system.urdf_coordinates[joint]
+        system.add_unilateral_constraint(q - lower, name=f"{joint} lower", restitution=restitution)
+        system.add_unilateral_constraint(upper - q, name=f"{joint} upper", restitution=restitution)
 
 
 def _read(path: str | os.PathLike) -> str:
@@ -482,6 +515,8 @@ def _build(robot: _Robot, fixed_base: bool) -> System:
             system.add_dissipation(d * qd**2 / 2, name=f"{jn} damping")
     system.urdf_name = robot.name
     system.urdf_values = values
+    used = {p.name for p in system.parameters}
+    system.set_parameter_defaults({k: v for k, v in values.items() if k in used})
     system.urdf_coordinates = dict(coords)
     system.urdf_links = prefixes
     system.joint_limits = {
