@@ -12,7 +12,9 @@
 
 The rule (:func:`choose`): the template kernels where there is no fused kernel (too large, a
 solver other than ``range-space``, or a function the printer cannot write); else machine code
-from :data:`MACHINE_FROM` unknowns n + m on, where one call of it (about 17–20 µs, most of it the
+from :data:`MACHINE_FROM` unknowns n + m on (up to :data:`MACHINE_LIMIT`; above
+``FUSED_LIMIT`` it is the kernel alone, solved with LAPACK, its LLVM optimization level by
+:func:`machine_opt_level`), where one call of it (about 17–20 µs, most of it the
 call's own overhead) beats the generated Python, which costs 1 µs on a pendulum, 9 µs at n + m = 4
 and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
 else the generated Python. No timing decides anything at run time: the same model, state and
@@ -36,6 +38,27 @@ from pfaff.core.errors import OptionError
 
 EVALUATORS = ("template", "python", "machine")
 MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
+OPTIMIZED_LIMIT = 40  # n + m up to which LLVM optimizes the machine code (opt_level 2)
+MACHINE_LIMIT = 72  # n + m up to which the fused kernel is compiled to machine code at all
+
+
+def machine_opt_level(n: int, m: int) -> int | None:
+    """SymEngine's LLVM ``opt_level`` for the machine code of a system of n + m unknowns, or None
+    where none is made: the compile time of the kernel alone grows faster than its size
+    (``benchmarks/engines.py``: at 33 unknowns, 2.5 s at level 2 against 0.5 s at level 0 for
+    a call 1.3–1.5× faster; at 65, 9 s at level 0, and level 1 already 83 s), so the optimizer
+    runs up to :data:`OPTIMIZED_LIMIT`, level 0 up to :data:`MACHINE_LIMIT`, and above that the
+    model keeps the generated Python kernel (a rule on the sizes, never a timing).
+
+    Examples
+    --------
+    >>> machine_opt_level(33, 0), machine_opt_level(48, 1), machine_opt_level(100, 0)
+    (2, 0, None)
+    """
+    size = n + m
+    if size > MACHINE_LIMIT:
+        return None
+    return 2 if size <= OPTIMIZED_LIMIT else 0
 
 
 def choose(

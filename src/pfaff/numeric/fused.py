@@ -60,9 +60,14 @@ class FusedKernel:
         outputs]`` on the flat array ``x = [t, q, q̇, params, alpha, beta, taus, cap]``, or None
         where it cannot (no LLVM in this SymEngine); ``llvm(build=False)`` only loads it from the
         on-disk cache. Non-finite outputs mean "take ``rfn``" (M not positive definite).
+        Without a generated solve (``solves`` False: above ``FUSED_LIMIT`` unknowns) it is
+        the kernel alone, ``f(x) -> fn's outputs`` on the same ``x``, and the model solves
+        with LAPACK (:mod:`pfaff.derive.machine_kernel`).
     rfn_aug : callable or None
         ``rfn`` for a singular M (quaternion coordinates): the same q̈ from M + ρAᵀA;
         ``make(*params, alpha, beta, *taus, cap, rho, slow)``.
+    solves : bool
+        Whether ``llvm`` is the whole right-hand side (with the solve) or the kernel alone.
     """
 
     fn: Callable
@@ -78,6 +83,7 @@ class FusedKernel:
     acols: tuple[int, ...]
     llvm: Callable[..., Callable | None] | None = None
     rfn_aug: Callable | None = None
+    solves: bool = True
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);
