@@ -123,3 +123,18 @@ def test_no_cliff_at_32_unknowns() -> None:
     got, want = machine.ode_function()(0.0, y), python.ode_function()(0.0, y)
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
     assert machine.timings["machine_kind"] == "kernel+LAPACK"
+
+
+def test_a_zero_push_does_no_work_and_a_push_does() -> None:
+    """Work integral only where work is done (issue 25, item 3): the chain's push F = 0 has no
+    power to integrate (W_nc ≡ 0); F = 0.7 does F·(x(t) − x(0)) of work on the cart."""
+    s = pfaff.models.n_link_pendulum_on_cart(2)
+    values = cart_parameters(s.equations())
+    q0, qd0 = np.array([0.0, 0.4, -0.3]), np.array([0.1, 0.0, 0.2])
+    idle = s.equations().compile({**values, "F": 0.0})
+    pushed = idle.with_parameters({**values, "F": 0.7})
+    assert not idle.applied_power and pushed.applied_power
+    still = pfaff.simulate(idle, q0, qd0, (0, 1.0))
+    assert np.all(still.nc_work == 0.0) and abs(still.energy_balance).max() < 1e-7
+    run = pfaff.simulate(pushed, q0, qd0, (0, 1.0))
+    np.testing.assert_allclose(run.nc_work, 0.7 * (run.q[:, 0] - q0[0]), atol=1e-9)

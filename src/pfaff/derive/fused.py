@@ -106,7 +106,16 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         _llvm_factory(eom, key) if solve else kernel_factory(n, m, key, lambda: _kernel_parts(eom)),
         rfn_aug,
         solve,
+        _operations(code["body"] + code["outs"]),
     ), status
+
+
+def _operations(lines: list[str]) -> int:
+    """Operators and calls in printed code: the kernel's size for the evaluator rule."""
+    return sum(len(_OPERATION.findall(line)) for line in lines)
+
+
+_OPERATION = re.compile(r"[-+*/(]")
 
 
 class _on_first_call:

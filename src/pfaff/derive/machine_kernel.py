@@ -30,7 +30,6 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
 
-
 def cached_machine(
     key: str | None, kind: str, builder: Callable[[], Callable]
 ) -> Callable[..., Callable | None]:

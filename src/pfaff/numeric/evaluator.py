@@ -17,6 +17,9 @@ from :data:`MACHINE_FROM` unknowns n + m on (up to :data:`MACHINE_LIMIT`; above
 :func:`machine_opt_level`), where one call of it (about 17–20 µs, most of it the
 call's own overhead) beats the generated Python, which costs 1 µs on a pendulum, 9 µs at n + m = 4
 and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
+or from :data:`MACHINE_OPS` operations in the kernel's generated code (a spatial 6R arm of six
+unknowns: 1700 operations, 90 µs per right-hand side in generated Python against 14 µs in
+machine code; a cart with 4 links, 250 operations, 13 µs either way, ``benchmarks/engines.py``);
 else the generated Python. No timing decides anything at run time: the same model, state and
 options take the same path in every process. ``compile(..., evaluator=...)`` overrides the rule.
 Machine code is compiled on a model's first evaluation (0.15 s for an 8-link chain, 0.8 s for the
@@ -38,6 +41,7 @@ from pfaff.core.errors import OptionError
 
 EVALUATORS = ("template", "python", "machine")
 MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
+MACHINE_OPS = 500  # operations of the fused kernel from which machine code is, at any n + m
 OPTIMIZED_LIMIT = 40  # n + m up to which LLVM optimizes the machine code (opt_level 2)
 MACHINE_LIMIT = 72  # n + m up to which the fused kernel is compiled to machine code at all
 
@@ -62,7 +66,13 @@ def machine_opt_level(n: int, m: int) -> int | None:
 
 
 def choose(
-    requested: str | None, n: int, m: int, has_fused: bool, why_not: str, has_machine: bool
+    requested: str | None,
+    n: int,
+    m: int,
+    has_fused: bool,
+    why_not: str,
+    has_machine: bool,
+    ops: int = 0,
 ) -> str:
     """The evaluator of a model: ``requested`` if it is possible, else the rule's.
 
@@ -75,6 +85,9 @@ def choose(
         Whether the model has a fused kernel; ``why_not`` says why not.
     has_machine : bool
         Whether the fused kernel can be compiled to machine code (SymEngine has LLVM).
+    ops : int
+        Operations in the fused kernel's generated code (:attr:`FusedKernel.ops`): from
+        :data:`MACHINE_OPS` on, machine code at any n + m.
 
     Examples
     --------
@@ -82,6 +95,8 @@ def choose(
     ('python', 'machine')
     >>> choose("template", 6, 3, True, "", True)
     'template'
+    >>> choose(None, 6, 0, True, "", True, ops=1700)  # a spatial 6R arm of point masses
+    'machine'
     """
     if requested is not None and requested not in EVALUATORS:
         raise OptionError(
@@ -97,7 +112,8 @@ def choose(
         raise OptionError("`evaluator`: 'machine' needs SymEngine built with LLVM, and it is not")
     if requested is not None:
         return requested
-    return "machine" if has_machine and n + m >= MACHINE_FROM else "python"
+    big = n + m >= MACHINE_FROM or ops >= MACHINE_OPS
+    return "machine" if has_machine and big else "python"
 
 
 class MachineCode:

@@ -68,6 +68,9 @@ class FusedKernel:
         ``make(*params, alpha, beta, *taus, cap, rho, slow)``.
     solves : bool
         Whether ``llvm`` is the whole right-hand side (with the solve) or the kernel alone.
+    ops : int
+        Operations in the generated kernel (operators and calls counted in its printed code):
+        a size the evaluator rule reads (:func:`pfaff.numeric.evaluator.choose`).
     """
 
     fn: Callable
@@ -84,6 +87,7 @@ class FusedKernel:
     llvm: Callable[..., Callable | None] | None = None
     rfn_aug: Callable | None = None
     solves: bool = True
+    ops: int = 0
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);

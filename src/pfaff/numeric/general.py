@@ -75,7 +75,8 @@ class GeneralParts:
         has_machine = fused is not None and (
             fused.llvm is not None or (machine_code is not None and machine_code.available)
         )
-        self.evaluator = choose(evaluator, n, m, fused is not None, why, has_machine)
+        ops = fused.ops if fused is not None else 0
+        self.evaluator = choose(evaluator, n, m, fused is not None, why, has_machine, ops)
         self._fused = None if self.evaluator == "template" else fused
         self._fused_kernel = fused  # kept for with_parameters (shared as it is)
         if machine_code is None and has_machine:
