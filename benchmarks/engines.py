@@ -46,10 +46,10 @@ from collections.abc import Callable
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-import sympy as sp  # noqa: E402
+import numpy as np
+import sympy as sp
 
-import pfaff  # noqa: E402
+import pfaff
 
 G, PUSH = 9.81, 0.7
 ARM_AXES = ("z", "y", "y", "x", "y", "x")
@@ -229,7 +229,10 @@ class Row:
         for ev, (_, f, y) in self.models.items():
             lists = getattr(f, "on_lists", None)
             yl = y.tolist()
-            out[f"pfaff {ev}"] = (lambda g=lists, a=yl: g(0.0, a)) if lists else (lambda: f(0.0, y))
+            if lists is not None:
+                out[f"pfaff {ev}"] = lambda g=lists, a=yl: g(0.0, a)
+            else:
+                out[f"pfaff {ev}"] = lambda g=f, a=y: g(0.0, a)
         q, v = self.rel
         tau = self._tau()
         pm, pd = self.pin
