@@ -190,18 +190,21 @@ def machine_rhs(
     the slow path or names the error). The compiled function's first 2n outputs are [q̇, q̈].
     ``fixed`` = [params, alpha, beta, taus, cap]; ``live``: a run's parameter vector, read at
     every call (inputs change it during a run)."""
-    buf = np.empty(1 + 2 * n + len(fixed))
+    buf = np.zeros(1 + 2 * n + len(fixed))
     buf[1 + 2 * n :] = fixed
     isfinite = math.isfinite
     k = 2 * n
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    res = np.empty(np.size(compiled(buf)))  # written in place by every call: no allocation
+    head = res[:k]
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        out = compiled(buf)[:k].tolist()
+        compiled(buf, out=res)
+        out = head.tolist()
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs

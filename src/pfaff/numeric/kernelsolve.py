@@ -62,13 +62,17 @@ def kernel_rhs(
     >>> from pfaff.numeric.fused import FusedKernel
     >>> fk = FusedKernel(None, None, None, None, None, np.array([0]), np.array([0]),
     ...                  np.array([0]), (1, 2, 2, 2), (), ())
-    >>> kernel = lambda x: np.array([1.0, -x[1]])
+    >>> def kernel(x, out=None):
+    ...     out = np.empty(2) if out is None else out
+    ...     out[:] = [1.0, -x[1]]
+    ...     return out
     >>> rhs = kernel_rhs(fk, kernel, 1, [0.0, 0.0, 0.0], None, (0.0, 0.0, 0.0, None),
     ...                  None, {"kkt_solves": 0})
     >>> rhs(0.0, [0.5, 2.0])
     [2.0, -0.5]
     """
-    m = len(fk.arows)
+    o0, o1, o2, o3 = fk.offsets
+    m = o2 - o1  # constraint rows: the −(Ȧq̇ + ḃ) block
     N = n + m
     buf = np.zeros(1 + 2 * n + len(fixed))
     buf[1 + 2 * n :] = fixed
@@ -76,17 +80,17 @@ def kernel_rhs(
     K = np.zeros((N, N))
     flat = K.reshape(-1)  # a view: the pattern's entries are refilled, the rest stays zero
     index, source = fk.kkt_index, fk.kkt_source
-    o0, o1, o2, o3 = fk.offsets
     alpha, beta, floor, scales = solve
     M, A = K[:n, :n], K[n:, :n]
     isfinite = math.isfinite
+    v = np.empty(np.size(compiled(buf)))  # the kernel's outputs, written in place by each call
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        v = compiled(buf)
+        compiled(buf, out=v)
         flat[index] = v[source]
         c = v[o1:o2]
         if alpha:
