@@ -5,7 +5,8 @@ script in a fresh subprocess whose ``PYTHONPATH`` is one checkout's ``src``; the
 alternate (``--pairs`` times, default 5, the first of a pair alternating too), with one shared
 on-disk cache folder, so both run warm (generated code and machine code made by a first,
 untimed round). Inside the subprocess the model is built and warmed up before the clock starts;
-the row's figure is the median over ``--repeat`` loops (µs per call, or CPU seconds per run).
+the row's figure is the median over ``--repeat`` loops (CPU µs per call, or CPU seconds per
+run: ``time.process_time``, so that a busy machine's descheduling is not counted).
 The table gives the medians over the pairs and the ratio new / base (< 1: faster now). All
 processes use one BLAS thread.
 
@@ -53,10 +54,10 @@ def per_call(fn, repeat, calls):
     fn()
     out = []
     for _ in range(repeat):
-        t = time.perf_counter()
+        t = time.process_time()
         for _ in range(calls):
             fn()
-        out.append((time.perf_counter() - t) / calls * 1e6)
+        out.append((time.process_time() - t) / calls * 1e6)
     return statistics.median(out)
 def per_run(fn, repeat):
     fn()

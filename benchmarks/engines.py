@@ -14,7 +14,7 @@ Before timing, each row checks that the engines agree: pfaff's q̈ (converted to
 against ``aba`` to 1e-8 and against MuJoCo's ``qacc`` to 1e-5 (its 1e-12 inertias), at a random
 state with a push on the cart.
 
-Timed (µs per call, single BLAS thread, ``time.perf_counter``): pfaff's right-hand side as
+Timed (µs per call, single BLAS thread, ``time.process_time``: CPU time, so that a busy machine's descheduling is not counted): pfaff's right-hand side as
 ``simulate`` calls it (``model.ode_function().on_lists`` on lists of floats where the model has a
 fused kernel, else the array call), warm (compiled, machine code built or loaded from the cache);
 ``pin.aba(model, data, q, v, tau)``; ``mj_forward`` after writing ``qpos``, ``qvel`` and
@@ -256,10 +256,10 @@ def timed(fns: dict[str, Callable[[], object]], rounds: int, calls: int) -> dict
     for r in range(rounds):
         for name in names if r % 2 == 0 else reversed(names):
             fn = fns[name]
-            start = time.perf_counter()
+            start = time.process_time()
             for _ in range(calls):
                 fn()
-            times[name].append((time.perf_counter() - start) / calls * 1e6)
+            times[name].append((time.process_time() - start) / calls * 1e6)
     return {k: statistics.median(v) for k, v in times.items()}
 
 
