@@ -11,6 +11,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
+import sympy as sp
 
 import pfaff
 from pfaff.derive import fused
@@ -157,3 +158,21 @@ def test_a_zero_push_does_no_work_and_a_push_does() -> None:
     assert np.all(still.nc_work == 0.0) and abs(still.energy_balance).max() < 1e-7
     run = pfaff.simulate(pushed, q0, qd0, (0, 1.0))
     np.testing.assert_allclose(run.nc_work, 0.7 * (run.q[:, 0] - q0[0]), atol=1e-9)
+
+
+@pytest.mark.usefixtures("low_limit")
+def test_kernel_machine_code_reads_a_runs_inputs() -> None:
+    """A particle on the line y = x pushed along x by an input u(t) = 4 + t: ẍ = ÿ = u/2, so
+    x(1) = (4/2 + 1/6)/2 from rest (the machine-code kernel reads the run's parameter vector)."""
+    x, y = pfaff.coordinates("x y")
+    u = sp.Symbol("u")
+    s = pfaff.System([x, y])
+    s.add_particle(1, [x, y])
+    s.add_force([u, 0], at=[x, y])
+    s.add_input(u)
+    s.add_holonomic_constraint(y - x)
+    model = s.equations().compile({}, evaluator="machine")
+    assert model.compile_machine_code() and model.timings["machine_kind"] == "kernel+LAPACK"
+    run = pfaff.simulate(model, [0, 0], [0, 0], (0, 1), inputs={"u": lambda t: 4.0 + t})
+    assert run.status == "success"
+    np.testing.assert_allclose(run.q[-1], [(2.0 + 1.0 / 6.0) / 2] * 2, rtol=1e-8)
