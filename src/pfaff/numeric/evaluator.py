@@ -49,10 +49,12 @@ MACHINE_LIMIT = 72  # n + m up to which the fused kernel is compiled to machine 
 def machine_opt_level(n: int, m: int) -> int | None:
     """SymEngine's LLVM ``opt_level`` for the machine code of a system of n + m unknowns, or None
     where none is made: the compile time of the kernel alone grows faster than its size
-    (``benchmarks/engines.py``: at 33 unknowns, 2.5 s at level 2 against 0.5 s at level 0 for
-    a call 1.3–1.5× faster; at 65, 9 s at level 0, and level 1 already 83 s), so the optimizer
-    runs up to :data:`OPTIMIZED_LIMIT`, level 0 up to :data:`MACHINE_LIMIT`, and above that the
-    model keeps the generated Python kernel (a rule on the sizes, never a timing).
+    (the kernel of the chain on a cart, CPU seconds on this project's busy 2-core machine: at 33
+    unknowns 2.5 s at level 2 against 0.5 s at level 0, for a call 1.45× faster; at 41, 9.8 s
+    against 1.4 s, 1.8× faster; at 65, 9 s at level 0 and level 1 already 83 s), so the
+    optimizer runs up to :data:`OPTIMIZED_LIMIT` (about 10 s of compilation, once: the result
+    is cached on disk), level 0 up to :data:`MACHINE_LIMIT`, and above that the model keeps the
+    generated Python kernel (a rule on the sizes, never a timing).
 
     Examples
     --------
