@@ -8,7 +8,9 @@ same model (issue 25). :func:`checked_solve` does it in one pass: the scaled fac
 the inertia test's criterion solves the system, and the Schur complement's own factor says
 whether the floor or the consistency check could matter. Where any of them could (M not safely
 definite, a Schur pivot below the floor, rows of very different sizes), it returns None and the
-model takes the full path, which names the problem.
+model takes the full path, which names the problem. Where the machine code has solved the state
+already (``evaluator="machine"``), the model keeps the full path's checks and that solution: the
+checks alone cost about what this pass does.
 """
 
 from __future__ import annotations
