@@ -22,6 +22,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from pfaff.core.symbols import accel, t
 from pfaff.derive import cache
 from pfaff.derive.engine import engine_safe
+from pfaff.derive.fusedpower import power_expression
 from pfaff.derive.machine_kernel import cached_machine, kernel_factory
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.generated import Portable, register
@@ -107,7 +108,28 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         rfn_aug,
         solve,
         _operations(code["body"] + code["outs"]),
+        _on_first_call(lambda: power_function(eom)),
     ), status
+
+
+def power_function(eom: Derivation) -> Callable | None:
+    """``pfn(t, q…, q̇…, *params) -> [P]`` (:attr:`FusedKernel.pfn`): the power of the applied
+    forces (:func:`pfaff.derive.fusedpower.power_expression`) printed as the kernel is; None
+    without applied forces.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> pfn = power_function(pfaff.models.n_link_pendulum_on_cart(1).equations())
+    >>> pfn(0.0, 0.0, 0.3, 2.0, 0.5, 0.7, 9.81, 1.0, 1.0, 1.0)  # F = 0.7 pushes the cart at 2 m/s
+    [1.4]
+    """
+    rule, args = _plain(eom)
+    P = power_expression(eom, rule, args)
+    if P is None:
+        return None
+    body, outs, names = _shared_code([P], args)
+    return _function("pfn", names, body, outs, MATH)
 
 
 def _operations(lines: list[str]) -> int:
@@ -135,6 +157,13 @@ class _on_first_call:
 
     def __call__(self, *args: object) -> object:
         return self._get()(*args)
+
+    def function(self) -> Callable | None:
+        """The function, made now if it was not yet; None when it cannot be made."""
+        try:
+            return self._get()
+        except ValueError:
+            return None
 
     def __reduce__(self) -> tuple:
         try:

@@ -21,7 +21,7 @@ from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.projection import DAMPING, SHRUNK
 from pfaff.numeric.protocol import ConstraintLinearization
 
-_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug")
+_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug", "pfn")
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,10 @@ class FusedKernel:
     ops : int
         Operations in the generated kernel (operators and calls counted in its printed code):
         a size the evaluator rule reads (:func:`pfaff.numeric.evaluator.choose`).
+    pfn : callable or None
+        ``pfn(t, q…, q̇…, *params) -> [P]``, the power Qᵀq̇ of the applied forces
+        (:mod:`pfaff.derive.fusedpower`), generated on its first call; ``pfn.function()``
+        (before it is pickled) makes it and returns it, or None when it cannot be made.
     """
 
     fn: Callable
@@ -88,6 +92,7 @@ class FusedKernel:
     rfn_aug: Callable | None = None
     solves: bool = True
     ops: int = 0
+    pfn: Callable | None = None
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);

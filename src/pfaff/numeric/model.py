@@ -326,6 +326,22 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
             return _live(make, live, fixed)
         return make(*self._p, *fixed)
 
+    def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
+        """P(t, q, q̇) = Qᵀq̇ of the applied forces at the compiled parameter values, unchecked:
+        one generated scalar function where the model has a fused kernel (the template
+        kernels' stream pass per forced template otherwise)."""
+        fk = self._fused
+        make = getattr(fk.pfn, "function", None) if fk is not None else None
+        pfn = make() if make is not None else (fk.pfn if fk is not None else None)
+        if pfn is None or not self.applied_power:
+            return super().power_function()
+        p = tuple(self.parameters.values())  # compile-time values (inputs: see DrivenModel)
+
+        def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+            return float(pfn(t, *q.tolist(), *qd.tolist(), *p)[0])
+
+        return power
+
     # ------------------------------------------------------------------ for the projection and IDA
     def residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Unchecked (f, A q̇ + b), each shape (m,)."""
