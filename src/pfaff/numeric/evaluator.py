@@ -197,16 +197,13 @@ def machine_rhs(
     isfinite = math.isfinite
     k = 2 * n
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
-    res = np.empty(np.size(compiled(buf)))  # written in place by every call: no allocation
-    head = res[:k]
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        compiled(buf, out=res)
-        out = head.tolist()
+        out = compiled(buf)[:k].tolist()  # (``out=`` measured 5 % slower: its shape checks)
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs

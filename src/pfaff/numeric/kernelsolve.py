@@ -62,10 +62,8 @@ def kernel_rhs(
     >>> from pfaff.numeric.fused import FusedKernel
     >>> fk = FusedKernel(None, None, None, None, None, np.array([0]), np.array([0]),
     ...                  np.array([0]), (1, 2, 2, 2), (), ())
-    >>> def kernel(x, out=None):
-    ...     out = np.empty(2) if out is None else out
-    ...     out[:] = [1.0, -x[1]]
-    ...     return out
+    >>> def kernel(x):
+    ...     return np.array([1.0, -x[1]])
     >>> rhs = kernel_rhs(fk, kernel, 1, [0.0, 0.0, 0.0], None, (0.0, 0.0, 0.0, None),
     ...                  None, {"kkt_solves": 0})
     >>> rhs(0.0, [0.5, 2.0])
@@ -83,14 +81,13 @@ def kernel_rhs(
     alpha, beta, floor, scales = solve
     M, A = K[:n, :n], K[n:, :n]
     isfinite = math.isfinite
-    v = np.empty(np.size(compiled(buf)))  # the kernel's outputs, written in place by each call
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        compiled(buf, out=v)
+        v = compiled(buf)
         flat[index] = v[source]
         c = v[o1:o2]
         if alpha:
