@@ -96,7 +96,16 @@ def _generator_hash() -> str:
     """The hash of the code that generates an entry: a changed generator never loads old code."""
     here = Path(__file__).parent
     h = hashlib.sha256()
-    for name in ("cache", "engine", "fused", "templates", "blocks", "equations"):
+    for name in (
+        "cache",
+        "engine",
+        "fused",
+        "fusedpower",
+        "machine_kernel",
+        "templates",
+        "blocks",
+        "equations",
+    ):
         h.update((here / f"{name}.py").read_bytes())
     h.update((here.parent / "numeric" / "smallsolve.py").read_bytes())
     return h.hexdigest()

@@ -61,7 +61,12 @@ def structured_model(
             "models with families yet: compile the system without families"
         )
     params = tuple(eom.parameters)
-    dyn = [dyn_streams(b, params, values) for b in eom.blocks if b.local.kind == "dynamics"]
+    live = frozenset(input_names(eom))
+    dyn = [
+        dyn_streams(b, params, values, inputs=live)
+        for b in eom.blocks
+        if b.local.kind == "dynamics"
+    ]
     con = [con_streams(b, params, values) for b in eom.blocks if b.local.kind != "dynamics"]
     model = StructuredModel(
         eom.n,

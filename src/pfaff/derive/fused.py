@@ -9,10 +9,8 @@ precomputed indices. The result is checked against the template kernels before i
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import pickle
 import re
 from typing import TYPE_CHECKING
 
@@ -24,6 +22,8 @@ from sympy.printing.pycode import PythonCodePrinter
 from pfaff.core.symbols import accel, t
 from pfaff.derive import cache
 from pfaff.derive.engine import engine_safe
+from pfaff.derive.fusedpower import power_expression
+from pfaff.derive.machine_kernel import cached_machine, kernel_factory
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.generated import Portable, register
 from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
@@ -104,9 +104,40 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         (off, off + n, off + n + m, off + n + 2 * m),
         tuple(i for i, _ in acon),
         tuple(j for _, j in acon),
-        _llvm_factory(eom, key) if solve else None,
+        _llvm_factory(eom, key) if solve else kernel_factory(n, m, key, lambda: _kernel_parts(eom)),
         rfn_aug,
+        solve,
+        _operations(code["body"] + code["outs"]),
+        _on_first_call(lambda: power_function(eom)),
     ), status
+
+
+def power_function(eom: Derivation) -> Callable | None:
+    """``pfn(t, q…, q̇…, *params) -> [P]`` (:attr:`FusedKernel.pfn`): the power of the applied
+    forces (:func:`pfaff.derive.fusedpower.power_expression`) printed as the kernel is; None
+    without applied forces.
+
+    Examples
+    --------
+    >>> import pfaff
+    >>> pfn = power_function(pfaff.models.n_link_pendulum_on_cart(1).equations())
+    >>> pfn(0.0, 0.0, 0.3, 2.0, 0.5, 0.7, 9.81, 1.0, 1.0, 1.0)  # F = 0.7 pushes the cart at 2 m/s
+    [1.4]
+    """
+    rule, args = _plain(eom)
+    P = power_expression(eom, rule, args)
+    if P is None:
+        return None
+    body, outs, names = _shared_code([P], args)
+    return _function("pfn", names, body, outs, MATH)
+
+
+def _operations(lines: list[str]) -> int:
+    """Operators and calls in printed code: the kernel's size for the evaluator rule."""
+    return sum(len(_OPERATION.findall(line)) for line in lines)
+
+
+_OPERATION = re.compile(r"[-+*/(]")
 
 
 class _on_first_call:
@@ -126,6 +157,13 @@ class _on_first_call:
 
     def __call__(self, *args: object) -> object:
         return self._get()(*args)
+
+    def function(self) -> Callable | None:
+        """The function, made now if it was not yet; None when it cannot be made."""
+        try:
+            return self._get()
+        except ValueError:
+            return None
 
     def __reduce__(self) -> tuple:
         try:
@@ -400,34 +438,25 @@ def _functions(
     return fn, sp.lambdify(args, exprs, modules="numpy", cse=True, docstring_limit=0)
 
 
-def _llvm_factory(eom: Derivation, key: str | None) -> Callable[[], Callable | None]:
+def _llvm_factory(eom: Derivation, key: str | None) -> Callable[..., Callable | None]:
     """``llvm`` of :class:`FusedKernel`: the right-hand side [q̇, q̈] as SymEngine expressions
     (the kernel's outputs, the constraint rows, and the floored Schur solve run on them by
     :func:`pfaff.numeric.smallsolve.schur_expressions`: the algorithm and floor of ``rfn``),
-    compiled by SymEngine's LLVM backend on first use, or loaded from the on-disk cache. It
-    holds ``eom`` (whose expressions it compiles) for as long as a model holds the kernel.
-    ``make(build=False)`` only loads it from the cache (None when it is not there)."""
-    done: list = []
+    compiled by SymEngine's LLVM backend on first use, or loaded from the on-disk cache
+    (:func:`pfaff.derive.machine_kernel.cached_machine`). It holds ``eom`` (whose expressions it
+    compiles) for as long as a model holds the kernel."""
 
-    def make(build: bool = True) -> Callable | None:
-        if done:
-            return done[0]
-        raw = cache.load(key, "llvm") if key is not None else None
-        if raw is not None:
-            with contextlib.suppress(Exception):
-                done.append(pickle.loads(raw))  # our own entry: private folder, hash verified
-                return done[0]
-        if not build:
-            return None
-        done.append(None)
+    def build() -> Callable:
         (mass, acon, exprs, _), args = _parts(eom)  # a failure is reported by MachineCode
-        done[0] = _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
-        if key is not None:
-            with contextlib.suppress(Exception):
-                cache.store(key, "llvm", pickle.dumps(done[0]))
-        return done[0]
+        return _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
 
-    return make
+    return cached_machine(key, "llvm", build)
+
+
+def _kernel_parts(eom: Derivation) -> tuple[list, list]:
+    """The kernel's outputs and the generated code's arguments (for the machine-code kernel)."""
+    (_, _, exprs, _), args = _parts(eom)
+    return exprs, args
 
 
 def _llvm_rhs(mass: list, acon: list, exprs: list, n: int, m: int, args: list) -> Callable:

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError, InertiaError
+from pfaff.numeric.checkedsolve import checked_solve
 from pfaff.numeric.checks import check_finite
 from pfaff.numeric.general import augmentation
 from pfaff.numeric.inertia import inertia_test, undetermined_message
@@ -162,13 +163,19 @@ class CheckedGeneral:
                 warn(self.constraint_names, A, f"at t = {t:g}")
                 return self._solve_kkt(K, forcing, -bias, t, rows=rows)
         K, forcing, _, bias, _, _ = self._kkt(t, q, qd)
+        last = self._run_state["last"]  # set when the machine code solved this state in _kkt
+        solved = last is not None and last[0] == t and last[1] == q.tobytes()
+        if not solved:  # one pass: the checks' factors solve (None: a check needs the full path)
+            fast = checked_solve(K, forcing, -bias, self.n)
+            if fast is not None:
+                self.stats["kkt_solves"] += 1
+                return fast
         full = inertia_test(K, t, self.n, self.m, self.coordinate_names)
         rows = independent_rows(K[self.n :, : self.n]) if self.m else None
         if rows is not None:  # redundant rows here: q̈ exact, λ minimum-norm
             warn(self.constraint_names, K[self.n :, : self.n], f"at t = {t:g}")
             return self._solve_kkt(K, forcing, -bias, t, full=full, rows=rows)
-        last = self._run_state["last"]
-        if not full and last is not None and last[0] == t and last[1] == q.tobytes():
+        if not full and solved and last is not None:
             if last[2] == qd.tobytes():  # the machine code solved this state with _kkt
                 self._run_state["last"] = None
                 return last[3][: self.n].copy(), last[3][self.n :].copy()

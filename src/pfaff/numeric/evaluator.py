@@ -12,9 +12,14 @@
 
 The rule (:func:`choose`): the template kernels where there is no fused kernel (too large, a
 solver other than ``range-space``, or a function the printer cannot write); else machine code
-from :data:`MACHINE_FROM` unknowns n + m on, where one call of it (about 17–20 µs, most of it the
+from :data:`MACHINE_FROM` unknowns n + m on (up to :data:`MACHINE_LIMIT`; above
+``FUSED_LIMIT`` it is the kernel alone, solved with LAPACK, its LLVM optimization level by
+:func:`machine_opt_level`), where one call of it (about 17–20 µs, most of it the
 call's own overhead) beats the generated Python, which costs 1 µs on a pendulum, 9 µs at n + m = 4
 and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
+or from :data:`MACHINE_OPS` operations in the kernel's generated code (a spatial 6R arm of six
+unknowns: 1700 operations, 90 µs per right-hand side in generated Python against 14 µs in
+machine code; a cart with 4 links, 250 operations, 13 µs either way, ``benchmarks/engines.py``);
 else the generated Python. No timing decides anything at run time: the same model, state and
 options take the same path in every process. ``compile(..., evaluator=...)`` overrides the rule.
 Machine code is compiled on a model's first evaluation (0.15 s for an 8-link chain, 0.8 s for the
@@ -37,10 +42,40 @@ from pfaff.core.stack import outside_pfaff
 
 EVALUATORS = ("template", "python", "machine")
 MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
+MACHINE_OPS = 500  # operations of the fused kernel from which machine code is, at any n + m
+OPTIMIZED_LIMIT = 40  # n + m up to which LLVM optimizes the machine code (opt_level 2)
+MACHINE_LIMIT = 72  # n + m up to which the fused kernel is compiled to machine code at all
+
+
+def machine_opt_level(n: int, m: int) -> int | None:
+    """SymEngine's LLVM ``opt_level`` for the machine code of a system of n + m unknowns, or None
+    where none is made: the compile time of the kernel alone grows faster than its size
+    (the kernel of the chain on a cart, CPU seconds on this project's busy 2-core machine: at 33
+    unknowns 2.5 s at level 2 against 0.5 s at level 0, for a call 1.45× faster; at 41, 9.8 s
+    against 1.4 s, 1.8× faster; at 65, 9 s at level 0 and level 1 already 83 s), so the
+    optimizer runs up to :data:`OPTIMIZED_LIMIT` (about 10 s of compilation, once: the result
+    is cached on disk), level 0 up to :data:`MACHINE_LIMIT`, and above that the model keeps the
+    generated Python kernel (a rule on the sizes, never a timing).
+
+    Examples
+    --------
+    >>> machine_opt_level(33, 0), machine_opt_level(48, 1), machine_opt_level(100, 0)
+    (2, 0, None)
+    """
+    size = n + m
+    if size > MACHINE_LIMIT:
+        return None
+    return 2 if size <= OPTIMIZED_LIMIT else 0
 
 
 def choose(
-    requested: str | None, n: int, m: int, has_fused: bool, why_not: str, has_machine: bool
+    requested: str | None,
+    n: int,
+    m: int,
+    has_fused: bool,
+    why_not: str,
+    has_machine: bool,
+    ops: int = 0,
 ) -> str:
     """The evaluator of a model: ``requested`` if it is possible, else the rule's.
 
@@ -53,6 +88,9 @@ def choose(
         Whether the model has a fused kernel; ``why_not`` says why not.
     has_machine : bool
         Whether the fused kernel can be compiled to machine code (SymEngine has LLVM).
+    ops : int
+        Operations in the fused kernel's generated code (:attr:`FusedKernel.ops`): from
+        :data:`MACHINE_OPS` on, machine code at any n + m.
 
     Examples
     --------
@@ -60,6 +98,8 @@ def choose(
     ('python', 'machine')
     >>> choose("template", 6, 3, True, "", True)
     'template'
+    >>> choose(None, 6, 0, True, "", True, ops=1700)  # a spatial 6R arm of point masses
+    'machine'
     """
     if requested is not None and requested not in EVALUATORS:
         raise OptionError(
@@ -75,7 +115,8 @@ def choose(
         raise OptionError("`evaluator`: 'machine' needs SymEngine built with LLVM, and it is not")
     if requested is not None:
         return requested
-    return "machine" if has_machine and n + m >= MACHINE_FROM else "python"
+    big = n + m >= MACHINE_FROM or ops >= MACHINE_OPS
+    return "machine" if has_machine and big else "python"
 
 
 class MachineCode:
@@ -152,7 +193,7 @@ def machine_rhs(
     the slow path or names the error). The compiled function's first 2n outputs are [q̇, q̈].
     ``fixed`` = [params, alpha, beta, taus, cap]; ``live``: a run's parameter vector, read at
     every call (inputs change it during a run)."""
-    buf = np.empty(1 + 2 * n + len(fixed))
+    buf = np.zeros(1 + 2 * n + len(fixed))
     buf[1 + 2 * n :] = fixed
     isfinite = math.isfinite
     k = 2 * n
@@ -163,7 +204,7 @@ def machine_rhs(
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        out = compiled(buf)[:k].tolist()
+        out = compiled(buf)[:k].tolist()  # (``out=`` measured 5 % slower: its shape checks)
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs

@@ -21,7 +21,7 @@ from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.projection import DAMPING, SHRUNK
 from pfaff.numeric.protocol import ConstraintLinearization
 
-_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug")
+_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug", "pfn")
 
 
 @dataclass(frozen=True)
@@ -60,9 +60,21 @@ class FusedKernel:
         outputs]`` on the flat array ``x = [t, q, q̇, params, alpha, beta, taus, cap]``, or None
         where it cannot (no LLVM in this SymEngine); ``llvm(build=False)`` only loads it from the
         on-disk cache. Non-finite outputs mean "take ``rfn``" (M not positive definite).
+        Without a generated solve (``solves`` False: above ``FUSED_LIMIT`` unknowns) it is
+        the kernel alone, ``f(x) -> fn's outputs`` on the same ``x``, and the model solves
+        with LAPACK (:mod:`pfaff.derive.machine_kernel`).
     rfn_aug : callable or None
         ``rfn`` for a singular M (quaternion coordinates): the same q̈ from M + ρAᵀA;
         ``make(*params, alpha, beta, *taus, cap, rho, slow)``.
+    solves : bool
+        Whether ``llvm`` is the whole right-hand side (with the solve) or the kernel alone.
+    ops : int
+        Operations in the generated kernel (operators and calls counted in its printed code):
+        a size the evaluator rule reads (:func:`pfaff.numeric.evaluator.choose`).
+    pfn : callable or None
+        ``pfn(t, q…, q̇…, *params) -> [P]``, the power Qᵀq̇ of the applied forces
+        (:mod:`pfaff.derive.fusedpower`), generated on its first call; ``pfn.function()``
+        (before it is pickled) makes it and returns it, or None when it cannot be made.
     """
 
     fn: Callable
@@ -78,6 +90,9 @@ class FusedKernel:
     acols: tuple[int, ...]
     llvm: Callable[..., Callable | None] | None = None
     rfn_aug: Callable | None = None
+    solves: bool = True
+    ops: int = 0
+    pfn: Callable | None = None
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pfaff.core.errors import ConstraintError, PfaffError
-from pfaff.numeric.evaluator import MachineCode, choose
+from pfaff.numeric.evaluator import MachineCode, choose, machine_opt_level
 from pfaff.numeric.kkt import STATE_FLOOR, augmentation_weight, solve_floored
 from pfaff.numeric.redundant import independent_rows
 from pfaff.numeric.solvers import general_solver
@@ -75,7 +75,8 @@ class GeneralParts:
         has_machine = fused is not None and (
             fused.llvm is not None or (machine_code is not None and machine_code.available)
         )
-        self.evaluator = choose(evaluator, n, m, fused is not None, why, has_machine)
+        ops = fused.ops if fused is not None else 0
+        self.evaluator = choose(evaluator, n, m, fused is not None, why, has_machine, ops)
         self._fused = None if self.evaluator == "template" else fused
         self._fused_kernel = fused  # kept for with_parameters (shared as it is)
         if machine_code is None and has_machine:
@@ -131,9 +132,26 @@ class GeneralParts:
     # ------------------------------------------------------------------ machine code
     def _machine(self) -> Callable | None:
         """The machine code when it is the evaluator (made on first use), else None."""
-        if self.evaluator != "machine" or self._machine_code is None:
+        mc = self._machine_code
+        if self.evaluator != "machine" or mc is None:
             return None
-        return self._machine_code.get(self._machine_agrees)
+        compiled = mc.get(self._machine_agrees)
+        if "machine_code" not in self.timings:  # type: ignore[attr-defined]
+            self._record_machine(mc)
+        return compiled
+
+    def _record_machine(self, mc: MachineCode) -> None:
+        """The machine code's kind and cost in ``timings``: ``machine_code`` (CPU seconds to
+        build or load it), ``machine_kind`` (``"rhs"``: the whole right-hand side;
+        ``"kernel+LAPACK"``: the kernel alone) and, for the latter, ``machine_opt_level``."""
+        fk = self._fused_kernel
+        timings = self.timings  # type: ignore[attr-defined]
+        timings["machine_code"] = mc.seconds
+        timings["machine_kind"] = "rhs" if fk is None or fk.solves else "kernel+LAPACK"
+        if fk is not None and not fk.solves:
+            timings["machine_opt_level"] = machine_opt_level(self.n, self.m)  # type: ignore[attr-defined]
+        if mc.compiled is None:
+            timings["machine_kind"] = "unavailable"
 
     def _machine_agrees(self, compiled: Callable) -> str:
         """ "" when the machine code agrees with ``fn`` and the array solve at a random state,
@@ -154,8 +172,10 @@ class GeneralParts:
             qdd, lam = python._reference_solve(t0, q, qd)
         except (PfaffError, ValueError, ArithmeticError, TypeError, RuntimeError) as e:
             return f"it could not be checked at a test state: {type(e).__name__}: {e}"
-        k = 2 * n + m
+        k = 2 * n + m if fk.solves else 0  # the kernel alone: no q̈, λ of its own
         ok = out.shape == (k + v.size,) and np.allclose(out[k:], v, rtol=1e-11, atol=1e-13)
+        if not fk.solves:
+            return "" if ok else "it disagrees with the generated Python code at a test state"
         K = np.zeros((n + m, n + m))
         K.flat[fk.kkt_index] = v[fk.kkt_source]
         if independent_rows(K[n:, :n]) is None:  # (redundant rows: λ is not unique, q̈ floored)
@@ -192,7 +212,7 @@ class GeneralParts:
             object.__setattr__(self, "evaluator", before)
             return False
         self.timings["evaluator"] = "machine"  # type: ignore[attr-defined]
-        self.timings.setdefault("machine_code", mc.seconds)  # type: ignore[attr-defined]
+        self._record_machine(mc)
         return True
 
     def _runtime_parameters(self) -> bool:

@@ -33,6 +33,7 @@ from pfaff.numeric.constraintlin import linearized_constraints
 from pfaff.numeric.evaluator import machine_rhs
 from pfaff.numeric.field import AccelerationField, not_real
 from pfaff.numeric.general import DENSE_LIMIT, GeneralParts, fused_states
+from pfaff.numeric.kernelsolve import kernel_rhs
 from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, KKTSystem, SingularKKT, SparseSolver, row_scales
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.protocol import ConstraintLinearization
@@ -119,7 +120,10 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
             buf[0], buf[1 : 1 + n], buf[1 + n : 1 + 2 * n] = t, q, qd
             buf[1 + 2 * n : 1 + 2 * n + len(self._p)] = self._p
             out = machine(buf)
-            if np.isfinite(out).all():
+            if not fk.solves:  # the kernel alone (above FUSED_LIMIT): the caller solves
+                if np.isfinite(out).all():
+                    return out
+            elif np.isfinite(out).all():
                 self._run_state["last"] = (t, q.tobytes(), qd.tobytes(), out[n : 2 * n + m])
                 return out[2 * n + m :]
         try:
@@ -298,6 +302,13 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
 
         if run["rows"] is not None:  # redundant rows: the exact reduced solve
             return slow
+        if not fk.solves and not run["full"]:  # above FUSED_LIMIT: machine-code kernel + LAPACK
+            machine = self._machine()
+            if machine is not None:
+                taus = [0.0] * (self.m + 1)  # (inputs of the whole right-hand side, unused here)
+                fixed = [*self._p, alpha, beta, *taus]
+                solve = (alpha, beta, floor, scales)
+                return kernel_rhs(fk, machine, n, fixed, live, solve, slow, self.stats)
         if run["full"] and run["rho"] and fk.rfn_aug is not None:  # M singular: M + ρAᵀA
             fixed = (alpha, beta, *([0.0] * (self.m + 1)), run["rho"], slow)
             make = fk.rfn_aug
@@ -314,6 +325,22 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         if live is not None:
             return _live(make, live, fixed)
         return make(*self._p, *fixed)
+
+    def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
+        """P(t, q, q̇) = Qᵀq̇ of the applied forces at the compiled parameter values, unchecked:
+        one generated scalar function where the model has a fused kernel (the template
+        kernels' stream pass per forced template otherwise)."""
+        fk = self._fused
+        make = getattr(fk.pfn, "function", None) if fk is not None else None
+        pfn = make() if make is not None else (fk.pfn if fk is not None else None)
+        if pfn is None or not self.applied_power:
+            return super().power_function()
+        p = tuple(self.parameters.values())  # compile-time values (inputs: see DrivenModel)
+
+        def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
+            return float(pfn(t, *q.tolist(), *qd.tolist(), *p)[0])
+
+        return power
 
     # ------------------------------------------------------------------ for the projection and IDA
     def residual(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,94 @@
+"""Compile stage, mid-size systems: the fused kernel alone as machine code, solved with LAPACK.
+
+Up to :data:`pfaff.derive.fused.FUSED_LIMIT` unknowns the whole right-hand side (kernel and
+floored range-space solve) is one machine-code function (:func:`pfaff.derive.fused.build_fused`).
+Above it the generated solve is too long to write out (O((n + m)³) lines), and the generated
+Python kernel was most of a call: one right-hand side of the 32-link chain on a cart cost about
+325 µs through it. Here the kernel alone (M, A, Q − h, −(Ȧq̇ + ḃ), b, f: the outputs of ``fn``)
+is compiled by SymEngine's LLVM backend and the model solves the assembled KKT system with LAPACK
+(``benchmarks/engines.py``).
+
+SymEngine's LLVM compile time grows quickly with the kernel's size, so the optimization level
+is chosen from the size (:func:`pfaff.numeric.evaluator.machine_opt_level`; a rule on n + m,
+never a timing) and the result is kept in the on-disk cache (:mod:`pfaff.derive.cache`) as the
+whole right-hand side of a small system is; above :data:`pfaff.numeric.evaluator.MACHINE_LIMIT`
+there is no machine code and the model evaluates as before.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import pickle
+from typing import TYPE_CHECKING
+
+import symengine
+
+from pfaff.derive import cache
+from pfaff.numeric.evaluator import machine_opt_level
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+
+def cached_machine(
+    key: str | None, kind: str, builder: Callable[[], Callable]
+) -> Callable[..., Callable | None]:
+    """``make(build=True)``: the machine code of ``builder()``, made on its first call and kept in
+    memory and under (``key``, ``kind``) in the on-disk cache; ``make(build=False)`` only loads
+    it from the cache (None when it is not there). A failure of ``builder`` propagates (the
+    caller, :class:`pfaff.numeric.evaluator.MachineCode`, warns and falls back)."""
+    done: list = []
+
+    def make(build: bool = True) -> Callable | None:
+        if done:
+            return done[0]
+        raw = cache.load(key, kind) if key is not None else None
+        if raw is not None:
+            with contextlib.suppress(Exception):
+                done.append(pickle.loads(raw))  # our own entry: private folder, hash verified
+                return done[0]
+        if not build:
+            return None
+        done.append(None)
+        done[0] = builder()
+        if key is not None:
+            with contextlib.suppress(Exception):
+                cache.store(key, kind, pickle.dumps(done[0]))
+        return done[0]
+
+    return make
+
+
+def kernel_factory(
+    n: int, m: int, key: str | None, parts: Callable[[], tuple[list, list]]
+) -> Callable[..., Callable | None] | None:
+    """``llvm`` of a :class:`pfaff.numeric.fused.FusedKernel` whose solve is not generated: the
+    kernel's outputs alone as machine code, ``f(x) -> fn's outputs`` on the same flat input
+    ``x = [t, q, q̇, params, alpha, beta, taus, cap]`` as the whole right-hand side (the last
+    2 + m + 1 entries unused), or None above :data:`pfaff.numeric.evaluator.MACHINE_LIMIT`.
+    ``parts()`` gives (the kernel's output expressions, the arguments ``_t, _y…, _p…``); it is
+    called only when the code is built, not when it comes from the cache.
+
+    Examples
+    --------
+    >>> import symengine as se
+    >>> x = se.Symbol("_y0")
+    >>> make = kernel_factory(40, 0, None, lambda: ([se.sin(x), 2 * x], [se.Symbol("_t"), x]))
+    >>> [round(v, 12) for v in make()([0.0, 0.5, 0.0, 0.0, 0.0]).tolist()]
+    [0.479425538604, 1.0]
+    >>> kernel_factory(400, 0, None, lambda: ([], [])) is None
+    True
+    """
+    level = machine_opt_level(n, m)
+    if level is None:
+        return None
+    return cached_machine(key, f"kernel{level}", lambda: _kernel(*parts(), m, level))
+
+
+def _kernel(exprs: list, args: list, m: int, level: int) -> Callable:
+    se = symengine
+    inputs = [se.Symbol(str(a)) for a in args]  # _t, _y…, _p…
+    inputs += [se.Symbol(name) for name in ("_alpha", "_beta")]
+    inputs += [se.Symbol(f"_tau{j}") for j in range(m)] + [se.Symbol("_cap")]
+    outs = [se.sympify(e) for e in exprs]
+    return se.Lambdify(inputs, outs, backend="llvm", cse=True, real=True, opt_level=level)

@@ -1,0 +1,105 @@
+"""The right-hand side of a mid-size model: its machine-code kernel and a LAPACK solve.
+
+Above ``FUSED_LIMIT`` unknowns the machine code is the fused kernel alone
+(:mod:`pfaff.derive.machine_kernel`): :func:`kernel_rhs` fills one preallocated augmented
+matrix from its outputs and solves it by the range-space method with the floor
+(:func:`pfaff.numeric.kkt.solve_floored`, the algorithm of the model's ``range-space`` solver),
+without the assembly of :meth:`pfaff.NumericModel._kkt` (a new matrix per call, the velocity
+residual). On the 32-link chain on a cart (33 unknowns) this is about a tenth of the generated
+Python kernel's right-hand side (``benchmarks/engines.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from pfaff.numeric.kkt import solve_floored
+
+if TYPE_CHECKING:
+    from pfaff.numeric.fused import FusedKernel
+
+
+def kernel_rhs(
+    fk: FusedKernel,
+    compiled: Callable,
+    n: int,
+    fixed: list,
+    live: list | None,
+    solve: tuple[float, float, float, np.ndarray | None],
+    slow: Callable[[float, list], list],
+    stats: dict,
+) -> Callable[[float, list], list]:
+    """``rhs(t, y: list) -> [q̇, q̈]`` (a list) from the machine-code kernel ``compiled``.
+
+    Parameters
+    ----------
+    fk : FusedKernel
+        The kernel's layout (``kkt_index``, ``kkt_source``, ``offsets``).
+    compiled : callable
+        ``compiled(x) -> fn's outputs`` on ``x = [t, q, q̇, *fixed]``.
+    n : int
+        Coordinates.
+    fixed : list
+        [params, alpha, beta, taus, cap]: the rest of ``x``.
+    live : list or None
+        A run's parameter vector, read at every call (inputs change it), or None.
+    solve : tuple
+        (alpha, beta, floor, scales) of the constraint rows and the rank-loss floor.
+    slow : callable
+        The model's array path, taken where the kernel is not finite or M is not positive
+        definite (it names the error or takes the LU solve).
+    stats : dict
+        The model's counters (``kkt_solves``).
+
+    Examples
+    --------
+    A unit mass on a spring, M = [1], Q − h = −q, with the layout of a one-coordinate kernel:
+
+    >>> from pfaff.numeric.fused import FusedKernel
+    >>> fk = FusedKernel(None, None, None, None, None, np.array([0]), np.array([0]),
+    ...                  np.array([0]), (1, 2, 2, 2), (), ())
+    >>> def kernel(x):
+    ...     return np.array([1.0, -x[1]])
+    >>> rhs = kernel_rhs(fk, kernel, 1, [0.0, 0.0, 0.0], None, (0.0, 0.0, 0.0, None),
+    ...                  None, {"kkt_solves": 0})
+    >>> rhs(0.0, [0.5, 2.0])
+    [2.0, -0.5]
+    """
+    o0, o1, o2, o3 = fk.offsets
+    m = o2 - o1  # constraint rows: the −(Ȧq̇ + ḃ) block
+    N = n + m
+    buf = np.zeros(1 + 2 * n + len(fixed))
+    buf[1 + 2 * n :] = fixed
+    p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    K = np.zeros((N, N))
+    flat = K.reshape(-1)  # a view: the pattern's entries are refilled, the rest stays zero
+    index, source = fk.kkt_index, fk.kkt_source
+    alpha, beta, floor, scales = solve
+    M, A = K[:n, :n], K[n:, :n]
+    isfinite = math.isfinite
+
+    def rhs(t: float, yl: list) -> list:
+        buf[0] = t
+        buf[1 : 1 + 2 * n] = yl
+        if live is not None:
+            buf[p0:p1] = live
+        v = compiled(buf)
+        flat[index] = v[source]
+        c = v[o1:o2]
+        if alpha:
+            c = c - 2.0 * alpha * (A @ buf[1 + n : 1 + 2 * n] + v[o2:o3])
+        if beta:
+            c = c - beta * beta * v[o3:]
+        try:
+            qdd = solve_floored(M, A, v[o0:o1], c, floor, scales)[0].tolist()
+        except np.linalg.LinAlgError:  # M not positive definite: the array path decides
+            return slow(t, yl)
+        stats["kkt_solves"] += 1
+        out = yl[n:] + qdd
+        return out if isfinite(sum(qdd)) else slow(t, yl)
+
+    return rhs
