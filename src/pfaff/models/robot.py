@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 import sympy as sp
-from sympy.physics.vector import ReferenceFrame
 
 from pfaff.api import System
 from pfaff.attitude import Rotation
@@ -81,6 +80,8 @@ def robot_arm(n: int, *, frames: bool = False) -> System:
     q = coordinates(" ".join(f"q{i}" for i in range(1, n + 1)))
     q = list(q) if isinstance(q, tuple | list) else [q]
     par = _symbols(n)
+    if frames:  # (sympy.physics imported only where it is used: import pfaff stays light)
+        from sympy.physics.vector import ReferenceFrame
     frame_n = ReferenceFrame("N") if frames else None
     system = System(q, frame=frame_n)
     g = sp.Symbol("g")
