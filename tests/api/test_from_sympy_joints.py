@@ -5,7 +5,8 @@ and a body with a full (off-diagonal) inertia, most with a pendulum body hung on
 ``PinJoint`` so the joint's coordinates couple with another one; gravity is tilted (−z and +x/3)
 so no coordinate is spared. The reference is SymPy's own ``System.form_eoms()`` (Kane's method):
 [q̇; u̇] from ``mass_matrix_full`` and ``forcing_full`` at random states. Every joint sets
-u = q̇ (its kinematic differential equations are u − q̇ = 0, checked), so u̇ is q̈.
+u = q̇ (its kinematic differential equations are u − q̇ = 0, checked), so u̇ is q̈. One more
+case adds SymPy's actuators (springs, a damper, a torque), which enter through their loads.
 The refusals at the end are what cannot be mapped: each is a pfaff error naming the problem.
 """
 
@@ -16,7 +17,11 @@ import pytest
 import sympy as sp
 from sympy.physics.mechanics import (
     CylindricalJoint,
+    DuffingSpring,
     Force,
+    LinearDamper,
+    LinearPathway,
+    LinearSpring,
     PinJoint,
     PlanarJoint,
     Point,
@@ -25,6 +30,7 @@ from sympy.physics.mechanics import (
     RigidBody,
     SphericalJoint,
     System,
+    TorqueActuator,
     WeldJoint,
     dynamicsymbols,
     inertia,
@@ -103,13 +109,34 @@ KINDS = ["pin", "prismatic", "cylindrical", "planar", "spherical", "weld"]
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_joint_against_kane(kind):
-    system = _system(kind)
+    _assert_matches_kane(_system(kind), seed=KINDS.index(kind))
+
+
+def test_actuators_against_kane():
+    """Actuators enter through their loads: a spring, a damper and a Duffing spring along the
+    line from a ground point to the sliding body, a torque between the slider and its pendulum."""
+    system = _system("prismatic")
+    k, c, k3, tau = sp.symbols("k c k3 tau")
+    anchor = system.fixed_point.locatenew("anchor", system.frame.y + system.frame.z / 2)
+    slider, pendulum = system.bodies[1], system.bodies[2]
+    line = LinearPathway(anchor, slider.masscenter)
+    system.add_actuators(
+        LinearSpring(k, line, equilibrium_length=sp.Rational(1, 2)),
+        LinearDamper(c, line),
+        DuffingSpring(k, k3, LinearPathway(anchor, pendulum.masscenter)),
+        TorqueActuator(tau, slider.frame.z, pendulum, slider),
+    )
+    _assert_matches_kane(system, seed=11)
+
+
+def _assert_matches_kane(system: System, *, seed: int) -> None:
+    """q̈ of from_sympy(system) equal to SymPy's Kane [q̇; u̇] at 4 random states (u = q̇)."""
     q, u = list(system.q), list(system.u)
     assert list(system.kdes) == [a - c.diff(t) for c, a in zip(q, u, strict=True)]
     converted = pfaff.from_sympy(system)
     assert list(converted.coordinates) == q
     pars = sorted(converted.parameters, key=str)
-    rng = np.random.default_rng(KINDS.index(kind))
+    rng = np.random.default_rng(seed)
     values = dict(zip(pars, rng.uniform(0.5, 1.5, len(pars)), strict=True))
     model = converted.equations().compile(values)
     system.form_eoms()
