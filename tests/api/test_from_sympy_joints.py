@@ -19,6 +19,7 @@ from sympy.physics.mechanics import (
     CylindricalJoint,
     DuffingSpring,
     Force,
+    LagrangesMethod,
     LinearDamper,
     LinearPathway,
     LinearSpring,
@@ -196,3 +197,19 @@ def test_refuses_a_parameter_value_that_is_not_a_number(value):
     """A user's string never reaches sympify; NaN is not a value."""
     with pytest.raises((pfaff.ModelTypeError, pfaff.ModelError), match="the value of 'g'"):
         pfaff.from_sympy(_system("spherical"), parameters={"g": value})
+
+
+def test_refuses_lagrange_loads_on_velocities_in_speeds():
+    """A LagrangesMethod whose loads act on points whose velocity is in a joint's speed u:
+    ∂v/∂q̇ would be 0 and gravity would vanish; refused instead."""
+    system = _system("pin")
+    u_to_qd = {u: c.diff(t) for c, u in zip(system.q, system.u, strict=True)}
+    lagrangian = sum((b.kinetic_energy(system.frame) for b in system.bodies[1:]), sp.S.Zero)
+    lm = LagrangesMethod(
+        lagrangian.xreplace(u_to_qd),
+        list(system.q),
+        forcelist=list(system.loads),
+        frame=system.frame,
+    )
+    with pytest.raises(pfaff.ModelError, match=r"its velocity in `N` depends on u_j\(t\)"):
+        pfaff.from_sympy(lm)

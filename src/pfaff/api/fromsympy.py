@@ -69,7 +69,7 @@ def from_sympy(obj: object, parameters: Mapping | Sequence | None = None) -> Sys
     ModelError
         For what cannot be mapped (auxiliary speeds, kinematic equations that do not determine
         the speeds, loads on something other than a point or a frame, a velocity SymPy cannot
-        give, an undeclared parameter, a parameter value that is not a number or expression).
+        give or one in functions of time other than q and its speeds, an undeclared parameter, a parameter value that is not a number or expression).
 
     Notes
     -----
@@ -249,11 +249,28 @@ def _generalized_forces(loads, frame, qd: list, u_of_qd: dict) -> list:
         if not isinstance(vec, me.Vector):
             raise ModelError(f"the load on {where} is not a Vector: {vec!r}")
         v = v.xreplace(u_of_qd) if u_of_qd else v
+        _in_rates(where, v, frame, qd)
         vec = vec.xreplace(u_of_qd) if u_of_qd and vec != 0 else vec
         (partials,) = me.partial_velocity([v], qd, frame)
         for j, pv in enumerate(partials):
             Q[j] += vec.dot(pv) if vec != 0 and pv != 0 else sp.S.Zero
     return Q
+
+
+def _in_rates(where, v, frame, qd: list) -> None:
+    """Refuse a velocity with a function of time other than q, q̇: its partial velocities in q̇
+    would miss those terms (a load would be dropped in silence)."""
+    from sympy.physics import mechanics as me
+
+    q = [r.expr for r in qd]  # q̇ are Derivative(q, t)
+    stray = me.find_dynamicsymbols(v, exclude=[*q, *qd], reference_frame=frame)
+    if stray:
+        names = ", ".join(sorted(str(s) for s in stray))
+        raise ModelError(
+            f"the load on `{where}`: its velocity in `{frame}` depends on {names}, which is not a "
+            "coordinate or a coordinate's rate (write a LagrangesMethod's velocities in q̇; give "
+            "a KanesMethod or System every speed and its kinematic differential equation)"
+        )
 
 
 def _kinetic_energy(body, frame) -> sp.Expr:
