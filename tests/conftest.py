@@ -1,6 +1,13 @@
-"""The test session's settings (its own code cache folder)."""
+"""The test session's settings (its own code cache folder) and shared fixtures."""
 
 from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def pytest_configure(config: object) -> None:
@@ -10,3 +17,12 @@ def pytest_configure(config: object) -> None:
     import tempfile
 
     os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="pfaff-test-cache-")
+
+
+@pytest.fixture(scope="module")
+def fourbar_example():
+    """examples/fourbar_sympy.py, imported as a module (a fresh copy per test module)."""
+    spec = importlib.util.spec_from_file_location("fourbar_sympy", EXAMPLES / "fourbar_sympy.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

@@ -6,23 +6,15 @@ Gauss-Newton completion)."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import pfaff
 
-PATH = Path(__file__).resolve().parents[2] / "examples" / "fourbar_sympy.py"
-
 
 @pytest.fixture(scope="module")
-def example():
-    spec = importlib.util.spec_from_file_location("fourbar_sympy", PATH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def example(fourbar_example):
+    return fourbar_example
 
 
 def test_closed_state_is_on_the_loop(example):

@@ -68,7 +68,21 @@ def from_sympy(obj: object, parameters: Mapping | Sequence | None = None) -> Sys
         For any other object.
     ModelError
         For what cannot be mapped (auxiliary speeds, kinematic equations that do not determine
-        the speeds, loads on something other than a point or a frame, an undeclared parameter).
+        the speeds, loads on something other than a point or a frame, a velocity SymPy cannot
+        give or one in functions of time other than q and its speeds, an undeclared parameter, a parameter value that is not a number or expression).
+
+    Notes
+    -----
+    Speeds u that are not the rates q̇ are replaced by u(q, q̇, t), the kinematic differential
+    equations k_ku u + k_kq̇ q̇ + f_k = 0 solved for u (they must be linear in u and q̇, one per
+    speed, with k_ku invertible). SymPy's joints all have u = q̇.
+
+    Multiplier sign: pfaff's equations are M q̈ + h = Q + Aᵀλ, A = ∂f/∂q for the holonomic rows
+    (∂g/∂q̇ for the velocity rows), in the order of SymPy's ``holonomic_constraints`` then
+    ``nonholonomic_constraints`` (``hol_coneqs`` then ``nonhol_coneqs``). Against a
+    ``LagrangesMethod`` with the same constraints, λ_pfaff = +λ solved from its
+    ``mass_matrix_full`` / ``forcing_full`` and −λ of its ``eom`` and of
+    ``solve_multipliers()``: SymPy stores −A as ``lam_coeffs`` (sympy#30215).
 
     Examples
     --------
@@ -127,6 +141,8 @@ def _from_kane(km: me.KanesMethod) -> _Pieces:
 
 
 def _from_system(s: me.System) -> _Pieces:
+    if s.u_aux:
+        raise ModelError(f"System: auxiliary speeds {list(s.u_aux)} cannot be mapped")
     loads = list(s.loads) + [ld for act in s.actuators for ld in act.to_loads()]
     return _from_kinematics(
         "System",
@@ -150,7 +166,7 @@ def _from_kinematics(name, q, u, kdes, f_h, f_nh, bodies, loads, frame) -> _Piec
         raise ModelError(f"{name}: no bodies (give them to the constructor or kanes_equations)")
     u_of_qd = _speeds(name, kdes, q, u, qd)
     pieces = _Pieces(q, name=name)
-    pieces.kinetic = sum((b.kinetic_energy(frame) for b in bodies), sp.S.Zero).xreplace(u_of_qd)
+    pieces.kinetic = sum((_kinetic_energy(b, frame) for b in bodies), sp.S.Zero).xreplace(u_of_qd)
     pieces.genforces = _generalized_forces(loads or [], frame, qd, u_of_qd)
     pieces.holonomic = list(f_h)
     velocity = [sp.sympify(g).xreplace(u_of_qd) for g in f_nh]
@@ -223,9 +239,9 @@ def _generalized_forces(loads, frame, qd: list, u_of_qd: dict) -> list:
                 f"a load must be (Point or ReferenceFrame, Vector), got {load!r}"
             ) from None
         if isinstance(where, me.Point):
-            v = where.vel(frame)
+            v = _sympy_kinematics(f"the load on point `{where}`", where.vel, frame)
         elif isinstance(where, me.ReferenceFrame):
-            v = where.ang_vel_in(frame)
+            v = _sympy_kinematics(f"the load on frame `{where}`", where.ang_vel_in, frame)
         else:
             raise ModelError(
                 f"a load acts on a {type(where).__name__}; only points and frames are mapped"
@@ -233,11 +249,42 @@ def _generalized_forces(loads, frame, qd: list, u_of_qd: dict) -> list:
         if not isinstance(vec, me.Vector):
             raise ModelError(f"the load on {where} is not a Vector: {vec!r}")
         v = v.xreplace(u_of_qd) if u_of_qd else v
+        _in_rates(where, v, frame, qd)
         vec = vec.xreplace(u_of_qd) if u_of_qd and vec != 0 else vec
         (partials,) = me.partial_velocity([v], qd, frame)
         for j, pv in enumerate(partials):
             Q[j] += vec.dot(pv) if vec != 0 and pv != 0 else sp.S.Zero
     return Q
+
+
+def _in_rates(where, v, frame, qd: list) -> None:
+    """Refuse a velocity with a function of time other than q, q̇: its partial velocities in q̇
+    would miss those terms (a load would be dropped in silence)."""
+    from sympy.physics import mechanics as me
+
+    q = [r.expr for r in qd]  # q̇ are Derivative(q, t)
+    stray = me.find_dynamicsymbols(v, exclude=[*q, *qd], reference_frame=frame)
+    if stray:
+        names = ", ".join(sorted(str(s) for s in stray))
+        raise ModelError(
+            f"the load on `{where}`: its velocity in `{frame}` depends on {names}, which is not a "
+            "coordinate or a coordinate's rate (write a LagrangesMethod's velocities in q̇; give "
+            "a KanesMethod or System every speed and its kinematic differential equation)"
+        )
+
+
+def _kinetic_energy(body, frame) -> sp.Expr:
+    return _sympy_kinematics(f"body `{body}`", body.kinetic_energy, frame)
+
+
+def _sympy_kinematics(what: str, method, frame):
+    """``method(frame)``, a SymPy velocity look-up; its ValueError (no velocity defined in
+    ``frame``) as a ModelError naming ``what``."""
+    try:
+        return method(frame)
+    except ValueError as exc:
+        why = " ".join(str(exc).split())
+        raise ModelError(f"{what}: SymPy cannot give its velocity ({why})") from None
 
 
 def _new_rows(holonomic: list, velocity: list, q: list, qd: list) -> list:
@@ -283,6 +330,20 @@ def _new_rows(holonomic: list, velocity: list, q: list, qd: list) -> list:
     return kept
 
 
+def _value(key: object, value: object) -> sp.Expr:
+    """A fixed parameter's value: a real number or a SymPy expression, never a string."""
+    if isinstance(value, sp.Expr):
+        return value
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        if not np.isfinite(value):
+            raise ModelError(f"`parameters`: the value of {key!r} is not finite: {value!r}")
+        return sp.Float(value) if isinstance(value, (float, np.floating)) else sp.Integer(value)
+    raise ModelTypeError(
+        f"`parameters`: the value of {key!r} must be a real number or a SymPy expression, "
+        f"got {type(value).__name__}"
+    )
+
+
 def _with_parameters(pieces: _Pieces, parameters: Mapping | Sequence | None) -> System:
     free = set().union(*(sp.sympify(e).free_symbols for e in pieces.exprs())) - {t}
     subs: dict = {}
@@ -292,7 +353,7 @@ def _with_parameters(pieces: _Pieces, parameters: Mapping | Sequence | None) -> 
             sym = by_name.get(key) if isinstance(key, str) else key
             if sym not in free:
                 raise ModelError(f"`parameters`: {key!r} is not a symbol of the model")
-            subs[sym] = sp.sympify(value)
+            subs[sym] = _value(key, value)
     elif parameters is not None:
         declared = {p if isinstance(p, str) else getattr(p, "name", p) for p in parameters}
         stray = sorted((s for s in free if s.name not in declared), key=str)
