@@ -142,6 +142,14 @@ def _options(kw: dict, span: tuple[float, float]) -> dict:
                 f"got {v:g}"
             )
         kw["first_step"] = v
+    v = kw["max_seconds"]
+    if v is not None:
+        v = _real(v, "max_seconds")
+        if not (v > 0 and math.isfinite(v)):
+            raise OptionError(
+                f"`max_seconds` must be a positive number of seconds or None (no limit); got {v:g}"
+            )
+        kw["max_seconds"] = v
     v = kw["max_steps"]
     if v is not None and (isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 1):
         raise OptionError(
@@ -244,6 +252,7 @@ def simulate(
     events: Sequence[Event] = (),
     rest_speed: float = 1e-6,
     max_steps: int | None = None,
+    max_seconds: float | None = None,
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -307,6 +316,9 @@ def simulate(
         friction about q̇ = 0) or stop advancing t (:mod:`pfaff.integrate.pace`); without
         ``t_eval`` every step is recorded, and a run whose states would need more than 1 GiB
         (or half the available memory) warns (:class:`pfaff.LongRunWarning`).
+    max_seconds : float, optional
+        Fail after this many seconds of wall-clock time from the first step (default: no
+        limit); the message starts "timed out at t = ...".
 
     Returns
     -------
@@ -346,6 +358,7 @@ def simulate(
             model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
             integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
             project_output, progress, throw, inputs, events, rest_speed, max_steps,
+            max_seconds,
         )  # fmt: skip
 
 
@@ -365,6 +378,7 @@ def _simulate(
     model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
     integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
     project_output, progress, throw, inputs, events, rest_speed=1e-6, max_steps=None,
+    max_seconds=None,
 ):  # fmt: skip
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
@@ -393,6 +407,7 @@ def _simulate(
             progress=progress,
             throw=throw,
             max_steps=max_steps,
+            max_seconds=max_seconds,
         ),
         (t0, t1),
     )
@@ -409,7 +424,8 @@ def _simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = not cls.reports_drift
-    pace = Pace(t1, max_steps, state_bytes(model.n, model.m) if te is None else None)
+    memory = state_bytes(model.n, model.m) if te is None else None
+    pace = Pace(t1, max_steps, memory, opts["max_seconds"])
     if contacts:
         run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
         found = _run_contacts(run, cls, options, te, t0, t1, q0a, qd0a, progress, user,

@@ -18,6 +18,7 @@ import os
 import pickle
 import socket
 import sys
+import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -39,6 +40,7 @@ TASKS_PER_WORKER = 4
 SAMPLES = 201
 SYNC = ("synchronous", "sync")
 PASSED = ("t_end", "samples")  # [simulate] keys the sweep uses itself, not pfaff.simulate
+CONNECT_SECONDS = 10.0  # a scheduler address must answer as Dask within this (then OptionError)
 
 
 @checked_keywords
@@ -51,6 +53,7 @@ def sweep(
     scheduler: Any = None,
     workers: int | None = None,
     progress: bool | None = None,
+    run_timeout: float | None = None,
 ) -> Any:
     """Simulate a model file over a grid of parameter values and initial states.
 
@@ -80,6 +83,10 @@ def sweep(
         Processes of the local cluster; default: the number of CPUs (at most one per run).
     progress : bool, optional
         A progress bar on stderr; default: when stderr is a terminal.
+    run_timeout : float, optional
+        Seconds of wall-clock time one run may take (its integration, from its first step); a
+        run over it stops with status "timeout" (its states up to there kept) and the sweep goes
+        on. Default: no limit.
 
     Returns
     -------
@@ -88,7 +95,7 @@ def sweep(
         ``multiplier`` (with its ``constraint`` names) as in :meth:`pfaff.Trajectory.to_xarray`.
         Variables ``q``, ``qd`` (varied..., time, coordinate), ``multipliers`` (varied..., time,
         multiplier), NaN past the end of a failed run, and per run ``status`` ("success",
-        "failed", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
+        "failed", "timeout", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
         ``constraint_residual`` (max |f|, |A q̇ + b|) and ``seconds``. Attributes: the model,
         ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``,
         and ``status``: "complete", or "interrupted" after Ctrl-C or SIGTERM (the cluster shut
@@ -148,6 +155,8 @@ def sweep(
         "vary fewer values, or report fewer samples",
     )
     options = {k: v for k, v in mf.simulate.items() if k not in PASSED}
+    if run_timeout is not None:
+        options["max_seconds"] = _run_timeout(run_timeout)
     spec = SweepSpec(
         text=text,
         filename=mf.path.name,
@@ -193,6 +202,16 @@ def shipped_model(mf: ModelFile) -> bytes | None:
     except PfaffError:
         return None
     return pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def _run_timeout(value: object) -> float:
+    """``run_timeout`` checked: a positive, finite number of seconds."""
+    ok = isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+    if not ok or not (0 < float(value) < math.inf):  # type: ignore[arg-type]
+        raise OptionError(
+            f"`run_timeout` must be a positive number of seconds (or None), got {value!r:.40}"
+        )
+    return float(value)  # type: ignore[arg-type]
 
 
 def _load(model: object) -> tuple[ModelFile, str]:
@@ -313,10 +332,19 @@ class _ClientContext:
         try:
             if isinstance(s, str):
                 _reachable(s)
-            client = Client(s, timeout=30, set_as_default=False)
-        except OSError as e:
+            client = _connect(Client, s)
+        except OSError as e:  # (a TimeoutError too: a server that accepts and never answers)
             self.__exit__()
-            raise OptionError(f"cannot reach the Dask scheduler at {s!r}: {e}") from None
+            raise OptionError(
+                f"cannot reach the Dask scheduler at {s!r:.80}: {e} (a server that accepts but "
+                f"does not answer as a Dask scheduler within {CONNECT_SECONDS:g} s is refused)"
+            ) from None
+        except Exception as e:  # a server answering something else than Dask's protocol
+            self.__exit__()
+            raise OptionError(
+                f"the address {s!r:.80} did not answer as a Dask scheduler: {type(e).__name__}: "
+                f"{str(e)[:200]}"
+            ) from None
         self.owned.insert(0, client)
         return client
 
@@ -326,6 +354,28 @@ class _ClientContext:
                 thing.close()
             except Exception:  # a cluster already gone
                 pass
+
+
+def _connect(client_class: Any, scheduler: Any) -> Any:
+    """A client of ``scheduler``, or TimeoutError after ``2 * CONNECT_SECONDS``: Dask's own
+    timeout covers its connection, not a server that accepts and then never answers, so the
+    client is made in a thread that is given up on (left to end with its daemon loop)."""
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_class(scheduler, timeout=CONNECT_SECONDS, set_as_default=False)
+        except BaseException as e:  # handed to the caller
+            box["error"] = e
+
+    thread = threading.Thread(target=connect, name="pfaff-connect", daemon=True)
+    thread.start()
+    thread.join(2 * CONNECT_SECONDS)
+    if thread.is_alive():
+        raise TimeoutError(f"no answer within {2 * CONNECT_SECONDS:g} s")
+    if "error" in box:
+        raise box["error"]
+    return box["client"]
 
 
 def _reachable(address: str, timeout: float = 5.0) -> None:
