@@ -34,6 +34,7 @@ from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.integrate.pace import Pace, state_bytes
+from pfaff.integrate.scale import DEFAULT_TOL, constraint_scale
 from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
 from pfaff.numeric.checks import check_model, check_state
 from pfaff.numeric.projection import Projector
@@ -118,11 +119,17 @@ def _stepper_class(method: object) -> type[Stepper]:
 def _options(kw: dict, span: tuple[float, float]) -> dict:
     """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
     for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol", "rest_speed"):
+        if key == "constraint_tol" and kw[key] is None:  # scaled to the problem (integrate.scale)
+            continue
         v = _real(kw[key], key)
         if not (math.isfinite(v) and v >= 0):
             raise OptionError(f"`{key}` must be a finite number >= 0; got {kw[key]!r}")
         kw[key] = v
-    if kw["rtol"] <= 0 or kw["atol"] <= 0 or kw["constraint_tol"] <= 0:
+    if (
+        kw["rtol"] <= 0
+        or kw["atol"] <= 0
+        or (kw["constraint_tol"] is not None and kw["constraint_tol"] <= 0)
+    ):
         raise OptionError("`rtol`, `atol` and `constraint_tol` must be positive")
     if kw["max_step"] is not None:  # SciPy's own checks would surface as bare ValueErrors
         v = _real(kw["max_step"], "max_step")
@@ -241,7 +248,7 @@ def simulate(
     first_step: float | None = None,
     alpha: float = 10.0,
     beta: float = 10.0,
-    constraint_tol: float = 1e-12,
+    constraint_tol: float | None = None,
     initial_tol: float = 1e-8,
     project_initial: bool = False,
     project_output: bool | None = None,
@@ -281,8 +288,11 @@ def simulate(
     alpha, beta : float
         Baumgarte gains (1/time); α = β damps the drift critically. Choose them a few times faster
         than the motion's own rates.
-    constraint_tol : float
-        Target max |f| and max |A q̇ + b| of projected states.
+    constraint_tol : float, optional
+        Target max |f| and max |A q̇ + b| of projected states. Default: 1e-12 times the scale
+        of the holonomic constraints at the start, when below 1 (``‖∂f/∂q‖`` times the largest
+        coordinate: a 1 mm pendulum gets 2e-18, so its length drifts no more than a metre
+        pendulum's; :mod:`pfaff.integrate.scale`).
     initial_tol : float
         Largest initial residual polished away silently; beyond it the state is refused unless
         ``project_initial``.
@@ -411,6 +421,14 @@ def _simulate(
         ),
         (t0, t1),
     )
+    if opts["constraint_tol"] is None:
+        try:  # (a bad state is refused by initial_state below, naming it)
+            q_start, qd_start = (np.asarray(v, dtype=float).ravel() for v in (q0, qd0))
+        except (TypeError, ValueError):
+            q_start = qd_start = np.zeros(0)
+        ok = q_start.size == qd_start.size == model.n
+        scale = constraint_scale(model, t0, q_start, qd_start) if ok else 1.0
+        opts["constraint_tol"] = DEFAULT_TOL * scale
     projector = Projector(model, tol=opts["constraint_tol"])
     options = StepperOptions(**{f.name: opts[f.name] for f in fields(StepperOptions)})
     try:
