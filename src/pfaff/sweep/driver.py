@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import OptionError, PfaffError
+from pfaff.core.errors import OptionError, PfaffError, SimulationError
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.memory import refuse_beyond
 from pfaff.modelfile import ModelFile, load_model
@@ -315,13 +315,21 @@ class _ClientContext:
             raise OptionError("`workers` sets the size of the local cluster: not with `scheduler`")
         if s is None:
             n = self.workers or min(os.cpu_count() or 1, self.runs)
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
+            try:
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.ERROR,
+                )
+            except Exception as e:  # e.g. "Nanny failed to start": a worker died as it started
+                raise SimulationError(
+                    f"the local Dask cluster of {n} worker process{'es' if n > 1 else ''} could not start: "
+                    f"{type(e).__name__}: {str(e)[:200]} (a worker process died as it started: "
+                    "check that `python -c 'import pfaff'` works in a new process, the memory "
+                    "free, and Dask's worker settings; or pass scheduler='synchronous')"
+                ) from None
             self.owned.append(cluster)
             s = cluster
         elif not isinstance(s, str) and not hasattr(s, "scheduler_address"):
