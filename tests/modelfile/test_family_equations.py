@@ -72,3 +72,18 @@ def test_equations_of_a_48_member_family_against_the_hand_derivation(tmp_path, c
         row = [parse(e) for e in a[k]]
         assert row[k] == -1 and row[k + 1] == 1 and sum(e != 0 for e in row) == 2
     assert len(rep["lagrange_equations"]) == N + 1 and len(rep["multipliers"]) == N
+
+
+def test_run_with_t_end_1e9_is_not_judged_stalled(tmp_path, capsys) -> None:
+    """``pfaff run --t-end 1e9`` on the pendulum used to fail at t ≈ 103 as "stalled"; now only
+    the file's ``max_steps`` ends it, far past that time, on the circle."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "examples" / "pendulum.toml").read_text()
+    path = tmp_path / "long.toml"
+    path.write_text(text.replace("t_end = 5.0", "t_end = 5.0\nmax_steps = 4000"))
+    main(["run", str(path), "--t-end", "1e9", "--samples", "3", "--json"])
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["status"] == "failed" and "max_steps = 4000" in rep["message"]
+    assert "stall" not in rep["message"] and "collapse" not in rep["message"]
+    assert float(rep["message"].split("t = ")[1].split(":")[0]) > 103.0  # past the old "stall"
