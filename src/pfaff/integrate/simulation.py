@@ -423,8 +423,10 @@ def _simulate(
     )
     if opts["constraint_tol"] is None:
         try:  # (a bad state is refused by initial_state below, naming it)
-            q_start, qd_start = (np.asarray(v, dtype=float).ravel() for v in (q0, qd0))
+            q_start, qd_start = (np.asarray(v).ravel() for v in (q0, qd0))
         except (TypeError, ValueError):
+            q_start = qd_start = np.zeros(0)
+        if not all(x.dtype.kind in "iuf" for x in (q_start, qd_start)):
             q_start = qd_start = np.zeros(0)
         ok = q_start.size == qd_start.size == model.n
         scale = constraint_scale(model, t0, q_start, qd_start) if ok else 1.0
