@@ -50,7 +50,7 @@ def _server(answer: bytes | None) -> tuple[socket.socket, int]:
 def test_a_silent_or_hostile_scheduler_is_refused_within_the_timeout(answer, monkeypatch) -> None:
     from pfaff.sweep import driver
 
-    monkeypatch.setattr(driver, "CONNECT_SECONDS", 2.0)
+    monkeypatch.setattr(driver, "CONNECT_SECONDS", 0.5)
     srv, port = _server(answer)
     try:
         with pytest.raises(pfaff.OptionError, match=f"127.0.0.1:{port}.*(Dask scheduler|answer)"):
