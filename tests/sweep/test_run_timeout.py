@@ -48,3 +48,20 @@ def test_simulate_max_seconds_refused_when_not_positive() -> None:
     model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
     with pytest.raises(pfaff.OptionError, match="`max_seconds` must be a positive number"):
         pfaff.simulate(model, [1, 0], [0, 0], (0, 1), max_seconds=-1)
+
+
+def test_cli_run_timeout(tmp_path, capsys) -> None:
+    import json
+
+    from pfaff.cli.main import main
+
+    path = tmp_path / "spring.toml"
+    path.write_text(SPRING)
+    argv = ["sweep", str(path), "--vary", "k=1:1e12:2", "--samples", "5"]
+    code = main([*argv, "--scheduler", "synchronous", "--run-timeout", "1", "--json"])
+    rep = json.loads(capsys.readouterr().out)
+    assert code == 0 and rep["runs"] == 2 and rep["succeeded"] == 1
+    assert rep["failures"] == [
+        {"point": {"k": 1e12}, "status": "timeout", "message": rep["failures"][0]["message"]}
+    ]
+    assert rep["failures"][0]["message"].startswith("timed out at t = ")
