@@ -4,6 +4,8 @@ MRP switching and the Euler-angle singularity."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -50,10 +52,17 @@ def _reference(w0, ts):
     return np.array(out)
 
 
-def _run(kind, w0, t_end, n_out, sequence="321"):
+@functools.cache
+def _compiled(kind, sequence):
+    """The torque-free body derived and compiled once per attitude set (a compiled model is
+    immutable; each simulate runs on its own copy)."""
     s = pfaff.models.torque_free_body(kind, sequence=sequence)
     att = s.bodies[0].attitude
-    model = s.equations().compile(dict(zip(["I1", "I2", "I3"], INERTIA, strict=True)))
+    return att, s.equations().compile(dict(zip(["I1", "I2", "I3"], INERTIA, strict=True)))
+
+
+def _run(kind, w0, t_end, n_out, sequence="321"):
+    att, model = _compiled(kind, sequence)
     q0 = att.from_dcm(np.eye(3))
     tr = pfaff.simulate(
         model, q0, att.rates(q0, w0), (0, t_end), t_eval=np.linspace(0, t_end, n_out), **TOL

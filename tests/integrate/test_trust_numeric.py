@@ -247,7 +247,7 @@ def test_exact_numbers_are_real_numbers() -> None:
         ("rtol", True),
         ("atol", 1j),
         ("alpha", math.nan),
-        ("constraint_tol", None),
+        ("constraint_tol", "1e-9"),
         ("method", ["projection"]),
         ("integrator", "Radau"),
         ("integrator", None),

@@ -136,7 +136,7 @@ def _initial(mf: Any, pairs: list[str] | None, aliases: dict[str, str]) -> Any:
 
 def run_equations(args: argparse.Namespace) -> int:
     """Print M, Q − h, A, b, the Lagrange equations and the work table of a model file."""
-    from pfaff.modelfile.printer import file_syntax, matrix_syntax
+    from pfaff.modelfile.printer import FileSyntax
 
     mf = _load(args)
     stage("deriving")
@@ -145,10 +145,8 @@ def run_equations(args: argparse.Namespace) -> int:
         eom = mf.system.equations()
     stage("printing")
     coords = list(eom.coordinates)
-    lagrange = [
-        f"{file_syntax(e.lhs, coords)} = {file_syntax(e.rhs, coords)}"
-        for e in eom.lagrange_equations
-    ]
+    fs = FileSyntax(coords)
+    lagrange = [f"{fs(e.lhs)} = {fs(e.rhs)}" for e in eom.lagrange_equations]
     work = []
     with warnings.catch_warnings():  # (reported below)
         warnings.simplefilter("ignore", RedundancyWarning)
@@ -159,8 +157,8 @@ def run_equations(args: argparse.Namespace) -> int:
             work.append(
                 {
                     "name": w.name,
-                    "generalized_force": [file_syntax(e, coords) for e in w.generalized_force],
-                    "virtual_power": file_syntax(w.virtual_power, coords),
+                    "generalized_force": [fs(e) for e in w.generalized_force],
+                    "virtual_power": fs(w.virtual_power),
                     "does_work": does,
                 }
             )
@@ -168,10 +166,10 @@ def run_equations(args: argparse.Namespace) -> int:
         "model": mf.name,
         "coordinates": [str(q.func) for q in coords],
         "parameters": mf.parameters,
-        "mass_matrix": matrix_syntax(eom.mass_matrix, coords),
-        "forcing": [file_syntax(e, coords) for e in eom.forcing],
-        "constraint_matrix": matrix_syntax(eom.constraint_matrix, coords),
-        "constraint_bias": [file_syntax(e, coords) for e in eom.constraint_bias],
+        "mass_matrix": fs.matrix(eom.mass_matrix),
+        "forcing": [fs(e) for e in eom.forcing],
+        "constraint_matrix": fs.matrix(eom.constraint_matrix),
+        "constraint_bias": [fs(e) for e in eom.constraint_bias],
         "constraint_names": list(eom.constraint_names),
         "multipliers": [str(s) for s in eom.multipliers],
         "lagrange_equations": lagrange,

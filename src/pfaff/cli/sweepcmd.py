@@ -57,6 +57,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "processes; 'synchronous': in this process",
     )
     p.add_argument("--workers", type=whole(1), help="local cluster size (default: the CPUs)")
+    p.add_argument(
+        "--run-timeout",
+        type=positive,
+        metavar="SECONDS",
+        help="wall-clock seconds one run may take; a run over it is marked 'timeout' and the "
+        "sweep goes on (default: no limit)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object (the summary)")
     return p
 
@@ -89,6 +96,7 @@ def _sweep(args: argparse.Namespace) -> int:
         samples=args.samples,
         scheduler=scheduler,
         workers=args.workers,
+        run_timeout=args.run_timeout,
     )
     seconds = time.perf_counter() - start
     if args.output is not None:

@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from pfaff.core.errors import PfaffError
+from pfaff.integrate.feasible import refuse_dense_ida
 from pfaff.integrate.stepper import Power, Stepper, StepperOptions
 from pfaff.integrate.work import hermite_work
 from pfaff.numeric.kkt import augmentation_weight
@@ -65,6 +66,7 @@ class IDAStepper(Stepper):
         mh = len(self.hrows)
         self.n, self.m, self.mh = n, m, mh
         self.size = 2 * n + m + mh
+        refuse_dense_ida(self.size, n)  # before IDA allocates anything (integrate.feasible)
         self.fd = self._finite_differences(opts)
         self._ref, self._ref_h = np.zeros(m), np.zeros(mh)  # rows' largest sizes so far
         alg = list(range(2 * n, self.size))

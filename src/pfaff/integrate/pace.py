@@ -9,6 +9,8 @@ smooth run over a long span takes steady steps and proceeds until it ends or is 
 - *no progress*: the mean step is below ``ULPS`` units in the last place of t (time no longer
   advances in floating point);
 - ``max_steps`` (an option, default unlimited);
+- ``max_seconds`` (an option, default unlimited): the run's wall-clock time from its first step
+  (a sweep's per-run time limit); it fails with the verb "timed out";
 - a run that records every step (no ``t_eval``) and whose states would fill more than
   :func:`memory_limit` at its measured pace warns once (:class:`pfaff.LongRunWarning`), with the
   estimate.
@@ -16,6 +18,7 @@ smooth run over a long span takes steady steps and proceeds until it ends or is 
 
 from __future__ import annotations
 
+import time
 import warnings
 
 import numpy as np
@@ -56,6 +59,9 @@ class Pace:
     state_bytes : int or None
         Bytes per recorded step when every step is recorded (no ``t_eval``); None: the run's
         memory is bounded, nothing to estimate.
+    max_seconds : float or None
+        Fail (:class:`TimeLimit`) once this many seconds of wall-clock time have passed since
+        the first step; None: no limit.
 
     Examples
     --------
@@ -72,8 +78,15 @@ class Pace:
     step-size collapse:
     """
 
-    def __init__(self, t1: float, max_steps: int | None, state_bytes: int | None) -> None:
+    def __init__(
+        self,
+        t1: float,
+        max_steps: int | None,
+        state_bytes: int | None,
+        max_seconds: float | None = None,
+    ) -> None:
         self.t1, self.max_steps, self.state_bytes = t1, max_steps, state_bytes
+        self.max_seconds, self._deadline = max_seconds, None if max_seconds is None else 0.0
         self.steps = 0
         self.largest = 0.0  # the largest step so far (the run's history)
         self._count, self._start = 0, 0.0  # steps and start time of the current window
@@ -85,7 +98,16 @@ class Pace:
         self.largest, self._count = 0.0, 0
 
     def limit(self) -> None:
-        """Before a step: fail when ``max_steps`` have been taken."""
+        """Before a step: fail when ``max_steps`` have been taken or ``max_seconds`` passed."""
+        if self._deadline is not None:
+            now = time.perf_counter()
+            if not self._deadline:  # the first step: the clock starts
+                self._deadline = now + float(self.max_seconds)  # type: ignore[arg-type]
+            elif now > self._deadline:
+                raise TimeLimit(
+                    f"the run took longer than max_seconds = {self.max_seconds:g} s of wall-clock "
+                    "time (simulate(max_seconds=...), a sweep's run_timeout)", hint=False
+                )  # fmt: skip
         if self.max_steps is not None and self.steps >= self.max_steps:
             raise _RunFailure(
                 f"reached max_steps = {self.max_steps} (simulate(max_steps=...)) before the end "
@@ -131,6 +153,12 @@ class Pace:
                 LongRunWarning,
                 stacklevel=outside_pfaff(),
             )
+
+
+class TimeLimit(_RunFailure):
+    """A run stopped by ``max_seconds``: status "failed", its message starting "timed out"."""
+
+    verb = "timed out"
 
 
 HINT = (

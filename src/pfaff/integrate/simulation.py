@@ -34,6 +34,7 @@ from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.integrate.pace import Pace, state_bytes
+from pfaff.integrate.scale import DEFAULT_TOL, constraint_scale
 from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
 from pfaff.numeric.checks import check_model, check_state
 from pfaff.numeric.projection import Projector
@@ -118,11 +119,17 @@ def _stepper_class(method: object) -> type[Stepper]:
 def _options(kw: dict, span: tuple[float, float]) -> dict:
     """Check every option of :func:`simulate` (an :class:`OptionError` naming it) before any work."""
     for key in ("rtol", "atol", "alpha", "beta", "constraint_tol", "initial_tol", "rest_speed"):
+        if key == "constraint_tol" and kw[key] is None:  # scaled to the problem (integrate.scale)
+            continue
         v = _real(kw[key], key)
         if not (math.isfinite(v) and v >= 0):
             raise OptionError(f"`{key}` must be a finite number >= 0; got {kw[key]!r}")
         kw[key] = v
-    if kw["rtol"] <= 0 or kw["atol"] <= 0 or kw["constraint_tol"] <= 0:
+    if (
+        kw["rtol"] <= 0
+        or kw["atol"] <= 0
+        or (kw["constraint_tol"] is not None and kw["constraint_tol"] <= 0)
+    ):
         raise OptionError("`rtol`, `atol` and `constraint_tol` must be positive")
     if kw["max_step"] is not None:  # SciPy's own checks would surface as bare ValueErrors
         v = _real(kw["max_step"], "max_step")
@@ -142,6 +149,14 @@ def _options(kw: dict, span: tuple[float, float]) -> dict:
                 f"got {v:g}"
             )
         kw["first_step"] = v
+    v = kw["max_seconds"]
+    if v is not None:
+        v = _real(v, "max_seconds")
+        if not (v > 0 and math.isfinite(v)):
+            raise OptionError(
+                f"`max_seconds` must be a positive number of seconds or None (no limit); got {v:g}"
+            )
+        kw["max_seconds"] = v
     v = kw["max_steps"]
     if v is not None and (isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 1):
         raise OptionError(
@@ -233,7 +248,7 @@ def simulate(
     first_step: float | None = None,
     alpha: float = 10.0,
     beta: float = 10.0,
-    constraint_tol: float = 1e-12,
+    constraint_tol: float | None = None,
     initial_tol: float = 1e-8,
     project_initial: bool = False,
     project_output: bool | None = None,
@@ -244,6 +259,7 @@ def simulate(
     events: Sequence[Event] = (),
     rest_speed: float = 1e-6,
     max_steps: int | None = None,
+    max_seconds: float | None = None,
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -272,8 +288,11 @@ def simulate(
     alpha, beta : float
         Baumgarte gains (1/time); α = β damps the drift critically. Choose them a few times faster
         than the motion's own rates.
-    constraint_tol : float
-        Target max |f| and max |A q̇ + b| of projected states.
+    constraint_tol : float, optional
+        Target max |f| and max |A q̇ + b| of projected states. Default: 1e-12 times the scale
+        of the holonomic constraints at the start, when below 1 (``‖∂f/∂q‖`` times the largest
+        coordinate: a 1 mm pendulum gets 2e-18, so its length drifts no more than a metre
+        pendulum's; :mod:`pfaff.integrate.scale`).
     initial_tol : float
         Largest initial residual polished away silently; beyond it the state is refused unless
         ``project_initial``.
@@ -307,6 +326,9 @@ def simulate(
         friction about q̇ = 0) or stop advancing t (:mod:`pfaff.integrate.pace`); without
         ``t_eval`` every step is recorded, and a run whose states would need more than 1 GiB
         (or half the available memory) warns (:class:`pfaff.LongRunWarning`).
+    max_seconds : float, optional
+        Fail after this many seconds of wall-clock time from the first step (default: no
+        limit); the message starts "timed out at t = ...".
 
     Returns
     -------
@@ -346,6 +368,7 @@ def simulate(
             model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
             integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
             project_output, progress, throw, inputs, events, rest_speed, max_steps,
+            max_seconds,
         )  # fmt: skip
 
 
@@ -365,6 +388,7 @@ def _simulate(
     model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
     integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
     project_output, progress, throw, inputs, events, rest_speed=1e-6, max_steps=None,
+    max_seconds=None,
 ):  # fmt: skip
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
@@ -393,9 +417,20 @@ def _simulate(
             progress=progress,
             throw=throw,
             max_steps=max_steps,
+            max_seconds=max_seconds,
         ),
         (t0, t1),
     )
+    if opts["constraint_tol"] is None:
+        try:  # (a bad state is refused by initial_state below, naming it)
+            q_start, qd_start = (np.asarray(v).ravel() for v in (q0, qd0))
+        except (TypeError, ValueError):
+            q_start = qd_start = np.zeros(0)
+        if not all(x.dtype.kind in "iuf" for x in (q_start, qd_start)):
+            q_start = qd_start = np.zeros(0)
+        ok = q_start.size == qd_start.size == model.n
+        scale = constraint_scale(model, t0, q_start, qd_start) if ok else 1.0
+        opts["constraint_tol"] = DEFAULT_TOL * scale
     projector = Projector(model, tol=opts["constraint_tol"])
     options = StepperOptions(**{f.name: opts[f.name] for f in fields(StepperOptions)})
     try:
@@ -409,7 +444,8 @@ def _simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = not cls.reports_drift
-    pace = Pace(t1, max_steps, state_bytes(model.n, model.m) if te is None else None)
+    memory = state_bytes(model.n, model.m) if te is None else None
+    pace = Pace(t1, max_steps, memory, opts["max_seconds"])
     if contacts:
         run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
         found = _run_contacts(run, cls, options, te, t0, t1, q0a, qd0a, progress, user,

@@ -92,7 +92,8 @@ SIMULATE_KEYS = {
     "t_end": float, "method": str, "rtol": float, "atol": float, "integrator": str,
     "max_step": float, "first_step": float, "alpha": float, "beta": float,
     "constraint_tol": float, "initial_tol": float, "project_initial": bool,
-    "project_output": bool, "samples": int, "rest_speed": float,
+    "project_output": bool, "samples": int, "rest_speed": float, "max_steps": int,
+    "max_seconds": float,
 }  # fmt: skip
 
 

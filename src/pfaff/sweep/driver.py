@@ -17,13 +17,15 @@ import math
 import os
 import socket
 import sys
+import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from pfaff.core.errors import OptionError
+from pfaff.core.errors import OptionError, SimulationError
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.memory import refuse_beyond
 from pfaff.modelfile import ModelFile
@@ -39,6 +41,7 @@ TASKS_PER_WORKER = 4
 SAMPLES = 201
 SYNC = ("synchronous", "sync")
 ALONE_TRIES = 2  # a suspect run alone on the cluster: failed only if its workers die this often
+CONNECT_SECONDS = 10.0  # a scheduler address must answer as Dask within this (then OptionError)
 
 
 @checked_keywords
@@ -55,6 +58,7 @@ def sweep(
     scheduler: Any = None,
     workers: int | None = None,
     progress: bool | None = None,
+    run_timeout: float | None = None,
 ) -> Any:
     """Simulate a model file or a compiled model over a grid of parameter values and initial
     states.
@@ -95,6 +99,10 @@ def sweep(
         Processes of the local cluster; default: the number of CPUs (at most one per run).
     progress : bool, optional
         A progress bar on stderr; default: when stderr is a terminal.
+    run_timeout : float, optional
+        Seconds of wall-clock time one run may take (its integration, from its first step); a
+        run over it stops with status "timeout" (its states up to there kept) and the sweep goes
+        on. Default: no limit.
 
     Returns
     -------
@@ -103,7 +111,7 @@ def sweep(
         ``multiplier`` (with its ``constraint`` names) as in :meth:`pfaff.Trajectory.to_xarray`.
         Variables ``q``, ``qd`` (varied..., time, coordinate), ``multipliers`` (varied..., time,
         multiplier), NaN past the end of a failed run, and per run ``status`` ("success",
-        "failed", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
+        "failed", "timeout", "interrupted"), ``message``, ``energy_error`` (max |T + V − E₀ − W_nc|),
         ``constraint_residual`` (max |f|, |A q̇ + b|) and ``seconds``. Attributes: the model,
         ``t_end``, ``runs``, ``succeeded``, ``failed``, ``workers``, ``batch``, ``wall_seconds``,
         and ``status``: "complete", or "interrupted" after Ctrl-C or SIGTERM (the cluster shut
@@ -172,6 +180,8 @@ def sweep(
         "vary fewer values, or report fewer samples",
     )
     spec = src.spec(grid, samples)
+    if run_timeout is not None:
+        spec = replace(spec, options={**spec.options, "max_seconds": _run_timeout(run_timeout)})
     if workers is not None and (
         isinstance(workers, bool) or not isinstance(workers, int | np.integer) or workers < 1
     ):
@@ -192,6 +202,16 @@ def sweep(
         "wall_seconds": time.perf_counter() - start,
     }
     return results.dataset(spec.t_eval, attrs)
+
+
+def _run_timeout(value: object) -> float:
+    """``run_timeout`` checked: a positive, finite number of seconds."""
+    ok = isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+    if not ok or not (0 < float(value) < math.inf):  # type: ignore[arg-type]
+        raise OptionError(
+            f"`run_timeout` must be a positive number of seconds (or None), got {value!r:.40}"
+        )
+    return float(value)  # type: ignore[arg-type]
 
 
 def _samples(samples: object) -> int:
@@ -247,13 +267,21 @@ class _ClientContext:
             raise OptionError("`workers` sets the size of the local cluster: not with `scheduler`")
         if s is None:
             n = self.workers or min(os.cpu_count() or 1, self.runs)
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
+            try:
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.ERROR,
+                )
+            except Exception as e:  # e.g. "Nanny failed to start": a worker died as it started
+                raise SimulationError(
+                    f"the local Dask cluster of {n} worker process{'es' if n > 1 else ''} could not start: "
+                    f"{type(e).__name__}: {str(e)[:200]} (a worker process died as it started: "
+                    "check that `python -c 'import pfaff'` works in a new process, the memory "
+                    "free, and Dask's worker settings; or pass scheduler='synchronous')"
+                ) from None
             self.owned.append(cluster)
             s = cluster
         elif not isinstance(s, str) and not hasattr(s, "scheduler_address"):
@@ -264,10 +292,19 @@ class _ClientContext:
         try:
             if isinstance(s, str):
                 _reachable(s)
-            client = Client(s, timeout=30, set_as_default=False)
-        except OSError as e:
+            client = _connect(Client, s)
+        except OSError as e:  # (a TimeoutError too: a server that accepts and never answers)
             self.__exit__()
-            raise OptionError(f"cannot reach the Dask scheduler at {s!r}: {e}") from None
+            raise OptionError(
+                f"cannot reach the Dask scheduler at {s!r:.80}: {e} (a server that accepts but "
+                f"does not answer as a Dask scheduler within {CONNECT_SECONDS:g} s is refused)"
+            ) from None
+        except Exception as e:  # a server answering something else than Dask's protocol
+            self.__exit__()
+            raise OptionError(
+                f"the address {s!r:.80} did not answer as a Dask scheduler: {type(e).__name__}: "
+                f"{str(e)[:200]}"
+            ) from None
         self.owned.insert(0, client)
         return client
 
@@ -277,6 +314,28 @@ class _ClientContext:
                 thing.close()
             except Exception:  # a cluster already gone
                 pass
+
+
+def _connect(client_class: Any, scheduler: Any) -> Any:
+    """A client of ``scheduler``, or TimeoutError after ``2 * CONNECT_SECONDS``: Dask's own
+    timeout covers its connection, not a server that accepts and then never answers, so the
+    client is made in a thread that is given up on (left to end with its daemon loop)."""
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_class(scheduler, timeout=CONNECT_SECONDS, set_as_default=False)
+        except BaseException as e:  # handed to the caller
+            box["error"] = e
+
+    thread = threading.Thread(target=connect, name="pfaff-connect", daemon=True)
+    thread.start()
+    thread.join(2 * CONNECT_SECONDS)
+    if thread.is_alive():
+        raise TimeoutError(f"no answer within {2 * CONNECT_SECONDS:g} s")
+    if "error" in box:
+        raise box["error"]
+    return box["client"]
 
 
 def _reachable(address: str, timeout: float = 5.0) -> None:

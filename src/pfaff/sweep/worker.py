@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from pfaff.core.errors import PfaffError
+from pfaff.integrate.pace import TimeLimit
 from pfaff.integrate.simulation import simulate
 from pfaff.modelfile import ModelFile, load_model
 from pfaff.sweep.grid import Grid
@@ -212,6 +213,8 @@ def _run(entry: _Compiled, spec: SweepSpec, i: int) -> tuple[Any, str, str]:
         return None, "failed", f"{type(e).__name__}: {e}"
     if traj.status == "interrupted":  # Ctrl-C (in this process): stop the sweep, not the run
         raise KeyboardInterrupt
+    if traj.status == "failed" and traj.message.startswith(TimeLimit.verb):
+        return traj, "timeout", traj.message  # over the sweep's run_timeout: the sweep goes on
     return traj, traj.status, traj.message
 
 
