@@ -148,9 +148,8 @@ class _on_first_call:
         self.build, self.made = build, None
 
     def _get(self) -> Callable:
-        if self.made is None:
-            self.made = self.build()
-            self.build = None
+        if self.build is not None:  # (once: a build that made nothing is not tried again)
+            self.made, self.build = self.build(), None
         if self.made is None:
             raise ValueError("the generated function could not be made")
         return self.made
@@ -169,16 +168,12 @@ class _on_first_call:
         try:
             return (Portable.load, (Portable.of(self._get()),))
         except ValueError:
-            return (_unavailable, ())
+            return (_on_first_call, (_nothing,))  # unpickled: still nothing (function() None)
 
 
-def _unavailable() -> Callable:
-    """A generated function that could not be made (it pickles as this)."""
-
-    def call(*args: object) -> object:
-        raise ValueError("the generated function could not be made")
-
-    return call
+def _nothing() -> None:
+    """The build of a generated function that could not be made (it pickles as this)."""
+    return None
 
 
 def _fusable(eom: Derivation) -> bool:
