@@ -138,6 +138,7 @@ def test_ring_closure_is_redundant() -> None:
 
 
 @pytest.mark.parametrize("family", [False, True])
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_ring_closure_named_on_the_sparse_path(family: bool) -> None:
     """Above 200 rows the dependency is found by sparse inverse iteration: same rule, a count."""
     n = 300

@@ -23,6 +23,7 @@ def _imported(code: str) -> set[str]:
     return {parts[2].strip() for parts in lines if len(parts) == 3}
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_import_pfaff_leaves_the_heavy_packages_for_later() -> None:
     modules = _imported("import pfaff")
     assert {"pfaff", "sympy", "numpy"} <= modules  # the report is read

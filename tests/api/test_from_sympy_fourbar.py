@@ -70,6 +70,7 @@ def _states(example, system, n):
         yield qn, np.concatenate([[rate], np.linalg.solve(An[:, 1:], -An[:, 0] * rate)])
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_fourbar_against_kane(example, fourbar):
     system, model = fourbar
     assert len(system.holonomic_constraints) == 2 and not system.nonholonomic_constraints
@@ -92,6 +93,7 @@ def test_fourbar_against_kane(example, fourbar):
             np.testing.assert_allclose(qdd, ref, rtol=0, atol=1e-12 * max(1.0, np.abs(ref).max()))
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_fourbar_against_lagrange_multiplier_form(example, fourbar, lagrange):
     system, model = fourbar
     lm = lagrange

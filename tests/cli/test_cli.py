@@ -13,6 +13,7 @@ import pytest
 from pfaff.cli import main
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_ring_json_64(capsys: pytest.CaptureFixture[str]) -> None:
     """The issue's check through the CLI: N = 64, M = 1, r = 0.5, F = 2."""
     code = main(
@@ -42,6 +43,7 @@ def test_ring_json_64(capsys: pytest.CaptureFixture[str]) -> None:
     assert rep["back_substitution_max_difference"] < 1e-12
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_ring_text_and_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "ring.png"
     assert main(["demo", "ring", "--particles", "5", "--plot", str(out)]) == 0

@@ -116,6 +116,7 @@ def test_ctrl_c_before_simulation_exits_130_in_one_line(
         assert captured.out == ""
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_ctrl_c_during_simulation_keeps_partial_outputs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -278,6 +279,7 @@ def test_plot_folder_is_a_folder(tmp_path: Path, capsys: pytest.CaptureFixture[s
 
 
 @pytest.mark.parametrize("option", [["--plot", "p.png"], ["--output", "p.csv"], ["--t-end", "0.2"]])
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_pendulum_simulation_options_imply_simulate(
     option: list[str],
     tmp_path: Path,

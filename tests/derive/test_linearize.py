@@ -173,6 +173,7 @@ def reduced_fourbar() -> tuple[float, float, float, float]:
     return th1, th2, th3, w2
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_fourbar_against_reduced_equation() -> None:
     eom = fourbar().equations()
     th1, th2, th3 = eom.coordinates

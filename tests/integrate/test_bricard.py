@@ -59,6 +59,7 @@ def test_reference_conserves_energy_and_closes(reference: dict[str, np.ndarray])
     assert np.abs(th[:, 0]).max() > 2.5  # a large motion, not a small oscillation
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_model_builds_with_one_redundant_row() -> None:
     """35 coordinates, 35 constraint rows; at the initial state the rows hold and have rank 34."""
     system = bricard()

@@ -77,6 +77,7 @@ def test_kane_matches_closed_form(values: dict) -> None:
         )
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_kane_linearization_closed_form() -> None:
     A, B = kane_linearization(VALUES, SPEED)
     A0, B0 = closed_form_linearization(VALUES, SPEED)
@@ -139,6 +140,7 @@ def _eom_independent():
     return pfaff.models.diffdrive(inputs=True, redundant=False).equations()
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_independent_rows_match_kane() -> None:
     """Today's baseline of the xfail tests below: the three independent rows."""
     model = _eom_independent().compile(VALUES)
@@ -193,6 +195,7 @@ def _pfaff_point(eom) -> tuple[dict, list, list]:
     return op, list(eom.coordinates), [phi_l, phi_r]
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_linearize_matches_kane() -> None:
     """About straight driving at SPEED: eom.linearize with state (x, y, ψ, φ_L, φ_R, φ̇_L, φ̇_R)."""
     eom = _eom()
@@ -203,6 +206,7 @@ def test_linearize_matches_kane() -> None:
     np.testing.assert_allclose(np.asarray(lin.B, dtype=float), B, atol=1e-10)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_compiled_linearize_matches_kane() -> None:
     eom = _eom()
     model = eom.compile(VALUES)

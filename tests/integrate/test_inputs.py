@@ -115,6 +115,7 @@ def test_bad_inputs() -> None:
         s.add_input(x)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_chattering_friction_fails_instead_of_hanging() -> None:
     """Coulomb friction −μ m g sign(ẋ) on a spring too weak to overcome it chatters about ẋ = 0
     once the block stops: the run stops with a message naming the cause, in seconds, not hours

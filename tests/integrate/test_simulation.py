@@ -31,6 +31,7 @@ def one_angle(t_end: float, t_eval: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize(("method", "periods"), [("projection", 100), ("ida", 5)])
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_pendulum_against_one_angle(pendulum, method: str, periods: int) -> None:
     """x = L cos φ, y = −L sin φ to 1e-7 with |f| <= 1e-10 at every reported point."""
     t_end = periods * 2.3678  # period of a release from horizontal, L = 1

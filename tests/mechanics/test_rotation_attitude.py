@@ -124,6 +124,7 @@ def _kane_qdd(kane, q, u) -> np.ndarray:
     return np.linalg.solve(mass(*q, *u), np.ravel(forcing(*q, *u)))
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_accelerations_match_kane(arm, kane) -> None:
     *_, model = arm
     rng = np.random.default_rng(7)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 import sympy as sp
 
 from pfaff.cli.main import main
@@ -42,6 +43,7 @@ over = ["k", 1, {N - 1}]
 """
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_equations_of_a_48_member_family_against_the_hand_derivation(tmp_path, capsys) -> None:
     path = tmp_path / "ring.toml"
     path.write_text(RING)

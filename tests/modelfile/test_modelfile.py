@@ -232,6 +232,7 @@ def test_run_output_netcdf_of_an_unconstrained_model_reads_back(tmp_path, capsys
         assert ds.attrs["multipliers"] == 0
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_body_attitude_as_a_table(tmp_path) -> None:
     text = """
 [model]

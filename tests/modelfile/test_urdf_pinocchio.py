@@ -66,11 +66,13 @@ def arm(request):
     return system, model, PinocchioArm(request.param, list(system.urdf_coordinates))
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_gravity_matches_pinocchio(arm):
     _, _, ref = arm
     assert np.allclose(ref.model.gravity.linear, [0, 0, -9.81])
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_mass_matrix_and_bias_against_pinocchio(arm):
     system, model, ref = arm
     n = len(system.urdf_coordinates)

@@ -142,6 +142,7 @@ def _fresh_process(model: object, t: float, q: np.ndarray, qd: np.ndarray) -> tu
         "machine",
     ],
 )
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_a_pickled_model_is_bit_identical_in_a_fresh_process(evaluator: str) -> None:
     model = chain(8).equations().compile({}, evaluator=evaluator)
     rng = np.random.default_rng(4)
@@ -153,6 +154,7 @@ def test_a_pickled_model_is_bit_identical_in_a_fresh_process(evaluator: str) -> 
     np.testing.assert_array_equal(lam, want[1])
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_a_pickled_family_model_round_trips_and_changes_values() -> None:
     N = 1024
     model = pfaff.models.rolling_ring(N, force=True, family=True).equations()

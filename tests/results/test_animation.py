@@ -131,6 +131,7 @@ def test_large_family_is_subsampled():
     np.testing.assert_array_equal(geo.points(only), pts)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_body_geometry_is_its_dcm(body):
     system, model = body
     att = system.bodies[0].attitude
@@ -362,6 +363,7 @@ def test_cli_ring_animation_implies_simulate(tmp_path, capsys):
     assert frame_count(out) == 3 and f"Wrote {out}" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_cli_tumble_animation(tmp_path, capsys):
     out = tmp_path / "tumble.gif"
     code = main(["demo", "tumble", "--t-end", "1", "--animate", str(out), "--frames", "2"])

@@ -102,6 +102,7 @@ def test_unconstrained_model_has_no_empty_panels(free_run: pfaff.Trajectory) -> 
     assert all(ax.get_ylabel() for ax in fig.axes)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_returned_figure_is_not_left_open_in_pyplot(
     pendulum_run: pfaff.Trajectory, tmp_path: Path
 ) -> None:
@@ -125,6 +126,7 @@ def test_unknown_figure_format_refused_before_drawing(
 
 # ------------------------------------------------------------------ ring figure
 @pytest.mark.parametrize("n", [5, 12, 64])
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_ring_legend_covers_no_particle(n: int) -> None:
     plt.close("all")
     fig = plot_ring(ring_report(n))

@@ -47,6 +47,7 @@ def _cells(page: str) -> dict[str, str]:
 
 
 # ------------------------------------------------------------------ figures
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_figure_shows_one_png_unless_written(
     pendulum_run: pfaff.Trajectory, tmp_path: Path
 ) -> None:

@@ -20,6 +20,7 @@ t_end = 10.0
 """
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_a_run_over_its_time_limit_is_marked_and_the_sweep_goes_on(tmp_path) -> None:
     path = tmp_path / "spring.toml"
     path.write_text(SPRING)
@@ -50,6 +51,7 @@ def test_simulate_max_seconds_refused_when_not_positive() -> None:
         pfaff.simulate(model, [1, 0], [0, 0], (0, 1), max_seconds=-1)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_cli_run_timeout(tmp_path, capsys) -> None:
     import json
 

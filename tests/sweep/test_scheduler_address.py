@@ -47,6 +47,7 @@ def _server(answer: bytes | None) -> tuple[socket.socket, int]:
     [None, b"\xff" * 64 + b"HTTP/1.1 200 OK\r\n\r\n" * 8],
     ids=["silent", "garbage"],
 )
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_a_silent_or_hostile_scheduler_is_refused_within_the_timeout(answer, monkeypatch) -> None:
     from pfaff.sweep import driver
 
