@@ -44,8 +44,11 @@ def constraint_scale(model: object, t0: float, q0: np.ndarray, qd0: np.ndarray) 
         _, A, _, _, _ = model.dae_blocks(t0, np.asarray(q0, float), np.asarray(qd0, float))
     except Exception:  # not defined there: the run reports it itself
         return 1.0
-    A = A.toarray() if hasattr(A, "toarray") else np.asarray(A)
-    gradients = np.linalg.norm(A[holonomic], axis=1)
+    if hasattr(A, "multiply"):  # sparse (a family): row norms without a dense copy
+        squares = np.asarray(A.multiply(A).sum(axis=1)).ravel()
+        gradients = np.sqrt(squares[: holonomic.size][holonomic])
+    else:
+        gradients = np.linalg.norm(np.asarray(A)[holonomic], axis=1)
     length = float(np.abs(q0).max(initial=0.0)) or 1.0
     scales = gradients[gradients > 0] * length
     if not scales.size or not np.isfinite(scales).all():
