@@ -29,6 +29,7 @@ def clean_run(model, t, q0=0.6, qd0=0.0):
     return pfaff.simulate(model, [q0], [qd0], (t[0], t[-1]), t_eval=t, rtol=1e-12, atol=1e-14)
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_noise_free_with_initial_values(model):
     t = np.linspace(0, 3, 61)
     run = clean_run(model, t, 0.6, 0.3)

@@ -190,6 +190,7 @@ def test_project_counts_only_real_corrections() -> None:
     np.testing.assert_array_equal(q2, q)
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_simulate_family_ring_closed_form() -> None:
     """x(t) = F t²/(4M) and λ_1 = -F/2 along a projected run with shared-trig kernels."""
     n = 4096

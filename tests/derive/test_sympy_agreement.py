@@ -382,6 +382,7 @@ def _close(a: np.ndarray, b: np.ndarray, what: str, info: str) -> None:
 # Tests
 # ---------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", list(CASES))
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_same_coordinates_and_multiplier_count(name):
     case = CASES[name]()
     assert tuple(case.system.coordinates) == case.q

@@ -305,6 +305,7 @@ def test_existing_file_replaced_whole(short: pfaff.Trajectory, tmp_path, writer:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fresh", "run.out"]  # no temp files
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_plot(short: pfaff.Trajectory, tmp_path) -> None:
     pytest.importorskip("pfaff.results.figures")
     pytest.importorskip("matplotlib")

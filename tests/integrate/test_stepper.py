@@ -95,6 +95,7 @@ def one_angle(theta0: float, te: np.ndarray) -> np.ndarray:
     return sol.y[0]
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_user_stepper_matches_the_minimal_pendulum(pendulum: pfaff.NumericModel) -> None:
     te = np.linspace(0.0, 2.0, 9)
     q0 = [math.sin(1.0), -math.cos(1.0)]

@@ -80,6 +80,7 @@ def test_dcm_is_a_rotation_and_matches_its_numeric_form(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", ALL)
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_dcm_rate_is_dcm_times_omega_cross(name: str) -> None:
     """Ċ = C [ω×] with ω in body components, symbolically and by central differences."""
     att, rng = SETS[name], np.random.default_rng(2)

@@ -27,6 +27,7 @@ def test_planar_body_kinetic_energy_and_velocity_of() -> None:
     assert sp.simplify(v - expect) == sp.zeros(2, 1)
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_spatial_body_energy_matches_hand_form() -> None:
     """T of a body with Euler angles 3-2-1 against ½ m v² + ½ ωᵀIω with ω written out by hand."""
     x, y, z, psi, th, ph = q = pfaff.coordinates("x y z psi theta phi")

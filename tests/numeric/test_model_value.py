@@ -170,6 +170,7 @@ def test_a_pickled_family_model_round_trips_and_changes_values() -> None:
     assert lam[0] == pytest.approx(-3.0, rel=1e-12)  # the friction multiplier -F/2
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_the_ring_pickles_without_its_work_arrays() -> None:
     """A pickle carries parts and values: O(1) in N, not the 2^16 particles' arrays."""
     sizes = []

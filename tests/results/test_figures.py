@@ -145,6 +145,7 @@ def test_ring_legend_covers_no_particle(n: int) -> None:
             assert not (inside_x and inside_y), f"legend covers the particle at ({px}, {py})"
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_ring_figure_math_and_units(tmp_path: Path) -> None:
     rep = ring_report(6)
     path = tmp_path / "ring.pdf"

@@ -95,6 +95,7 @@ def test_failed_run_summary_says_why() -> None:
     assert traj.status == "failed" and cells["status"] == f"failed: {traj.message}"
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_names_are_escaped() -> None:
     s, x = _oscillator()
     s.add_event(x, name="<b>x</b> & zero")
