@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from pfaff.derive.equations import Derivation
 
 FUSED_LIMIT = 32  # n + m up to which a fused scalar kernel and its generated solve are made
+CHECKS = 3  # the pivot checks at the end of the machine code's outputs (FusedKernel.checks)
 KERNEL_LIMIT = 128  # up to which the fused kernel alone serves models of distinct pieces
 
 
@@ -73,9 +74,14 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
     mass = [tuple(x) for x in code["mass"]]
     acon = [tuple(x) for x in code["acon"]]
     fn, vfn, _, efn = fns
-    rfn = rfn_aug = cfn = None  # the generated solve: straight-line code of O((n + m)³)
+    rfn = rfn_aug = cfn = afn = None  # the generated solve: straight-line code of O((n + m)³)
     if solve:
         rfn = _rhs_function(code["body"], code["outs"], mass, acon, n, m, len(eom.parameters))
+        afn = _on_first_call(  # a checked accelerations() call's: made on its first call
+            lambda: _rhs_function(
+                code["body"], code["outs"], mass, acon, n, m, len(eom.parameters), checked=True
+            )
+        )
         rfn_aug = _on_first_call(  # needed only where M is singular (quaternions): made then
             lambda: _rhs_function(
                 code["body"], code["outs"], mass, acon, n, m, len(eom.parameters), augmented=True
@@ -109,6 +115,8 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         solve,
         _operations(code["body"] + code["outs"]),
         _on_first_call(lambda: power_function(eom)),
+        afn,
+        CHECKS if solve else 0,
     ), status
 
 
@@ -445,7 +453,7 @@ def _llvm_factory(eom: Derivation, key: str | None) -> Callable[..., Callable | 
         (mass, acon, exprs, _), args = _parts(eom)  # a failure is reported by MachineCode
         return _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
 
-    return cached_machine(key, "llvm", build)
+    return cached_machine(key, "llvm-pivots", build)  # (the outputs end with the checks)
 
 
 def _kernel_parts(eom: Derivation) -> tuple[list, list]:
@@ -480,12 +488,16 @@ def _llvm_rhs(mass: list, acon: list, exprs: list, n: int, m: int, args: list) -
             (d, d >= tau), (tau / 2 + se.Max(d, 0) ** 2 / (2 * tau), True)
         ),
         "capped": lambda tj, top: se.Min(tj, top),
+        "min": lambda *a: se.Min(*a),
     }
-    solved = schur_expressions(mass, acon, values, n, m, namespace)  # q̈, then λ
+    solved = schur_expressions(mass, acon, values, n, m, namespace, checked=True)
     inputs = [*syms, alpha, beta, *taus, cap]
     # outputs: q̇, q̈, λ, then the kernel's own outputs (those of fn): one call gives a model
-    # everything it evaluates at a state (NumericModel.use_machine_code)
-    return se.Lambdify(inputs, [*y[n:], *solved, *ex], backend="llvm", cse=True)
+    # everything it evaluates at a state (NumericModel.use_machine_code); last, the CHECKS
+    # pivots a checked accelerations() reads (pfaff.numeric.checkedsolve.passes)
+    k = n + m
+    outs = [*y[n:], *solved[:k], *ex, *solved[k:]]
+    return se.Lambdify(inputs, outs, backend="llvm", cse=True)
 
 
 def _rhs_function(
@@ -497,6 +509,7 @@ def _rhs_function(
     m: int,
     n_params: int,
     augmented: bool = False,
+    checked: bool = False,
 ) -> Callable | None:
     """``rfn`` (see :class:`FusedKernel`): the shared kernel code, the constraint rows
     c = −(Ȧq̇ + ḃ) − 2α(A q̇ + b) − β² f, and the floored Schur solve, in one function.
@@ -504,7 +517,11 @@ def _rhs_function(
     ``augmented`` (``rfn_aug``, for a singular M such as quaternion coordinates give): the solve
     of (M + ρAᵀA) q̈ = Q − h + ρAᵀc + Aᵀλ, A q̈ = c, which has the same q̈ and λ (A q̈ = c makes
     the added terms equal) and a positive definite matrix where M is definite on null(A); ρ is
-    the argument ``_rho`` of ``make`` after the floor's."""
+    the argument ``_rho`` of ``make`` after the floor's.
+
+    ``checked`` (``afn``, for a checked ``accelerations()``): ``acc(t, y, params)`` returns
+    q̈, λ and the checks of :func:`pfaff.numeric.smallsolve.schur_source` (a list), without
+    stabilization or floor, or None where M is not positive definite or S is singular."""
     nM, nA = len(mass), len(acon)
     off = nM + nA
     Ms, As = [f"_m{k}" for k in range(nM)], [f"_a{k}" for k in range(nA)]
@@ -517,13 +534,16 @@ def _rhs_function(
     for i in range(m):
         nb, b, f = outs[off + n + i], outs[off + n + m + i], outs[off + n + 2 * m + i]
         gi = " + ".join(g[i]) or "0.0"
-        lines.append(f"{cs[i]} = ({nb}) - 2*_alpha*({gi} + ({b})) - _beta**2*({f})")
+        stabilized = f" - 2*_alpha*({gi} + ({b})) - _beta**2*({f})" if not checked else ""
+        lines.append(f"{cs[i]} = ({nb}){stabilized}")
     if augmented:
         mass, Ms, Fs = _augment(mass, acon, Ms, As, Fs, cs, lines)
-    schur, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
-    lines += [ln.strip() for ln in schur]
     ys = ", ".join(f"_y{i}" for i in range(2 * n))
     params = [f"_p{k}" for k in range(n_params)]
+    if checked:
+        return _checked_function(body, lines, mass, acon, (Ms, As, Fs, cs), ys, params)
+    schur, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
+    lines += [ln.strip() for ln in schur]
     rho = ["_rho"] if augmented else []
     src = "\n".join(
         [
@@ -545,6 +565,38 @@ def _rhs_function(
     except (SyntaxError, RecursionError):  # something the printer cannot write: the array path
         return None
     return namespace["make"]
+
+
+def _checked_function(
+    body: list[str], lines: list[str], mass: list, acon: list, names: tuple, ys: str,
+    params: list[str],
+) -> Callable | None:  # fmt: skip
+    """``afn`` (see :func:`_rhs_function`): the kernel, c = −(Ȧq̇ + ḃ) (α = β = 0) and the
+    unfloored Schur solve, returning [q̈, λ, checks] or None."""
+    lam: list[str] = []
+    checks: list[str] = []
+    schur, out = schur_source(
+        mass, acon, *names, prefix="_v", multipliers=lam, checks=checks
+    )  # fmt: skip
+    src = "\n".join(
+        [
+            "def acc(_t, _y, _p):",
+            f"    {ys}, = _y",
+            f"    {''.join(p + ', ' for p in params)}= _p" if params else "",
+            "    try:",
+            *[f"        {ln}" for ln in body + lines + [x.strip() for x in schur]],
+            "    except (ValueError, ZeroDivisionError):",
+            "        return None",
+            f"    return [{', '.join(out + lam + checks)}]",
+        ]
+    )
+    namespace = {**MATH, **NAMESPACE, "min": min, "max": max}
+    try:
+        filename = register(src + "\n", "fused acc")  # (in linecache: it pickles as its source)
+        exec(compile(src + "\n", filename, "exec"), namespace)  # our own generated code
+    except (SyntaxError, RecursionError):
+        return None
+    return namespace["acc"]
 
 
 def _augment(

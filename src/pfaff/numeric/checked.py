@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from pfaff.core.errors import ConstraintError, InertiaError
-from pfaff.numeric.checkedsolve import checked_solve
+from pfaff.numeric.checkedsolve import checked_solve, fused_accelerations
 from pfaff.numeric.checks import check_finite
 from pfaff.numeric.general import augmentation
 from pfaff.numeric.inertia import inertia_test, undetermined_message
@@ -141,6 +141,9 @@ class CheckedGeneral:
         """
         if inputs is not None:
             return self._with_inputs(inputs).accelerations(t, q, qd)
+        fast = fused_accelerations(self, t, q, qd)  # type: ignore[arg-type]
+        if fast is not None:  # the generated solve's pivots: nothing for the checks to find
+            return fast
         if self.n + self.m <= UNLIMITED_UP_TO:  # tiny solves: no BLAS thread waits, no limit
             return self._checked_accelerations(t, q, qd)
         with self._threads():

@@ -1,19 +1,27 @@
-"""The fast path of a checked ``accelerations()``: the inertia check and the solve share one factor.
+"""The fast paths of a checked ``accelerations()``: the checks read the pivots of the solve itself.
 
-A checked call of a dense model used to run the inertia test (a Cholesky factorization of the
-Jacobi-scaled M, :func:`pfaff.numeric.inertia.inertia_test`), then the floored range-space solve
-(another factorization of M, :func:`pfaff.numeric.kkt.solve_floored`), then a consistency check
-of A q̈ = c: three passes of NumPy calls around small LAPACK ones, 4–30× a right-hand side of the
-same model (issue 25). :func:`checked_solve` does it in one pass: the scaled factor that passes
-the inertia test's criterion solves the system, and the Schur complement's own factor says
-whether the floor or the consistency check could matter. Where any of them could (M not safely
-definite, a Schur pivot below the floor, rows of very different sizes), it returns None and the
-model takes the full path, which names the problem. Where the machine code has solved the state
-already (``evaluator="machine"``), the model keeps the full path's checks and that solution: the
-checks alone cost about what this pass does.
+A checked call used to assemble the augmented matrix and run the inertia test (a Cholesky
+factorization of the Jacobi-scaled M, :func:`pfaff.numeric.inertia.inertia_test`), the
+redundancy test and the floored range-space solve: three passes of NumPy calls around small
+LAPACK ones, 4–34× a right-hand side of the same model (issue 25). Two shorter paths:
+
+- :func:`fused_accelerations`, a small model with a generated solve: one call of its machine
+  code, or of the generated Python ``FusedKernel.afn``, returns q̈, λ and the pivots that
+  solved them (:func:`pfaff.numeric.smallsolve.schur_source`); where :func:`passes` holds,
+  none of the checks could find anything, and the call is about a right-hand side
+  (``benchmarks/accelerations.py``);
+- :func:`checked_solve`, any dense model: the scaled factor that passes the inertia test's
+  criterion solves the system, and the Schur complement's own factor says whether the floor
+  or the consistency check could matter.
+
+Where any of them could (M not safely definite, a Schur pivot below the floor, rows of very
+different sizes), both return None and the model takes the full path, which names the problem.
 """
 
 from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -21,10 +29,15 @@ import scipy.linalg
 from pfaff.numeric.inertia import M_PIVOT
 from pfaff.numeric.kkt import STATE_FLOOR
 
+if TYPE_CHECKING:
+    from pfaff.numeric.model import NumericModel
+
 _potrf = scipy.linalg.lapack.dpotrf
 _potrs = scipy.linalg.lapack.dpotrs
 _trtrs = scipy.linalg.lapack.dtrtrs
 CLEAR = 1e-8  # a Schur pivot (unit diagonal) above this: no floor, no inconsistency to find
+SPREAD = 1e-8  # diagonal entries of S this far apart: the floor's own row scaling decides
+_SCHUR = max(CLEAR, STATE_FLOOR)
 
 
 def checked_solve(
@@ -79,3 +92,87 @@ def checked_solve(
     lam = r * _potrs(C, r * (c - A @ y), lower=1)[0]
     qdd = y + s * _potrs(L, s * (A.T @ lam), lower=1)[0]
     return (qdd, lam) if np.isfinite(qdd.sum() + lam.sum()) else None
+
+
+def passes(m_pivot: float, s_pivot: float, spread: float) -> bool:
+    """Whether a solve's pivots clear every check a state's full path makes.
+
+    ``m_pivot``: the smallest Cholesky pivot of M over its diagonal entry (the pivot of the
+    Jacobi-scaled M, whose test is :func:`pfaff.numeric.inertia.inertia_test`'s fast
+    criterion); ``s_pivot``: the same of S = A M⁻¹ Aᵀ (above :data:`CLEAR`, A has full rank
+    and A q̈ = c has a solution: no redundant row, no inconsistency, no floor); ``spread``: the
+    smallest diagonal entry of S over the largest. NaN fails.
+
+    Examples
+    --------
+    >>> passes(0.5, 1.0, 1.0), passes(1e-14, 1.0, 1.0), passes(0.5, float("nan"), 1.0)
+    (True, False, False)
+    """
+    return m_pivot > M_PIVOT and s_pivot > _SCHUR and spread > SPREAD
+
+
+def fused_accelerations(
+    model: NumericModel, t: object, q: object, qd: object
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """q̈ and λ at a state from the generated solve of a small model, or None.
+
+    One call of the model's machine code (its outputs end with the pivot checks) or, with the
+    generated Python as evaluator, of ``FusedKernel.afn``: q̈, λ and the pivots of the
+    factorizations that solved them. Where the pivots pass (:func:`passes`) and the results
+    are finite, the checks of the full path could find nothing (M safely definite, A of full
+    rank); else None, and the model takes the full path, which names the problem. The
+    inertia check then costs three comparisons instead of its own factorizations
+    (issue 25: ``accelerations()`` was 7–34× a right-hand side, ``benchmarks/accelerations.py``).
+    Only a plain state is taken here (a finite float t, finite float64 arrays of shape (n,));
+    anything else is None too: the full path's :func:`pfaff.numeric.checks.check_state` then
+    accepts it or names what is wrong.
+    """
+    fk, n = model._fused, model.n
+    if (
+        fk is None
+        or not isinstance(t, float)
+        or type(q) is not np.ndarray
+        or type(qd) is not np.ndarray
+        or q.dtype != _FLOAT
+        or qd.dtype != _FLOAT
+        or q.shape != (n,)
+        or qd.shape != (n,)
+    ):
+        return None
+    k, p, run = n + model.m, model._p, model._run_state
+    y = q.tolist() + qd.tolist()
+    if not math.isfinite(t + sum(y)):
+        return None
+    if model.evaluator == "machine":
+        machine = model._machine()
+        if machine is None or fk.checks != 3 or not fk.solves:
+            return None
+        buf = run["buf"]
+        buf[0], buf[1 : 1 + n], buf[1 + n : 1 + 2 * n] = t, q, qd
+        if type(p) is not tuple or run.get("p") is not p:  # (a run's inputs change a list)
+            buf[1 + 2 * n : 1 + 2 * n + len(p)] = p
+            run["p"] = p
+        out = machine(buf)
+        run["last"] = None  # (the full path's cache of a machine solve: not this call's)
+        if not passes(*out[-3:].tolist()):
+            return None
+        res = out[n : n + k].copy()
+        if not math.isfinite(sum(res.tolist())):
+            return None
+        return res[:n], res[n:]
+    acc = run.get("afn")
+    if acc is None:
+        make = getattr(fk.afn, "function", None)
+        acc = run["afn"] = (make() if make is not None else fk.afn) or False
+    if not acc or fk.rfn is None:  # (no rfn: the generated solve disagreed when checked)
+        return None
+    r = acc(t, y, p)
+    if r is None or not passes(*r[-3:]):
+        return None
+    if not math.isfinite(sum(r)):  # (the checks passed: finite themselves)
+        return None
+    out = np.array(r)
+    return out[:n], out[n:k]
+
+
+_FLOAT = np.dtype(float)

@@ -17,6 +17,8 @@ import scipy.sparse as sps
 from pfaff.core.errors import ModelTypeError, OptionError, PfaffError, StateError
 from pfaff.numeric.protocol import DynamicsModel
 
+SHORT = 64  # entries up to which a vector's finiteness is tested on a Python list
+
 
 def real_number(value: object, arg: str, error: type[PfaffError] = StateError) -> float:
     """``value`` as a finite real float, else ``error`` (a :class:`StateError` by default)
@@ -81,8 +83,10 @@ def real_vector(value: object, arg: str, n: int, names: Sequence[str] | None = N
             which = f" for coordinates {', '.join(names[:6])}{'...' if n > 6 else ''};"
         raise StateError(f"`{arg}` must have shape ({n},){which} got shape {a.shape}")
     # one pass and no temporary: a finite sum means finite entries (NaN and ±inf propagate);
-    # only a sum that overflowed needs the elementwise test
-    if not (math.isfinite(float(np.sum(a))) or np.isfinite(a).all()):
+    # only a sum that overflowed needs the elementwise test; a short vector is summed as a
+    # list (0.3 µs against 3 µs for np.sum at n = 9: a checked call of a small model pays it)
+    total = sum(a.tolist()) if n <= SHORT else float(a.sum())
+    if not (math.isfinite(total) or np.isfinite(a).all()):
         raise StateError(f"`{arg}` contains NaN or infinity")
     return a
 

@@ -21,7 +21,7 @@ from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.projection import DAMPING, SHRUNK
 from pfaff.numeric.protocol import ConstraintLinearization
 
-_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug", "pfn")
+_FUNCTIONS = ("fn", "vfn", "efn", "rfn", "cfn", "rfn_aug", "pfn", "afn")
 
 
 @dataclass(frozen=True)
@@ -57,8 +57,8 @@ class FusedKernel:
     llvm : callable or None
         ``llvm()`` compiles (on first call, then cached in memory and on disk) the same
         right-hand side as ``rfn`` to machine code and returns ``f(x) -> [q̇, q̈, λ, fn's
-        outputs]`` on the flat array ``x = [t, q, q̇, params, alpha, beta, taus, cap]``, or None
-        where it cannot (no LLVM in this SymEngine); ``llvm(build=False)`` only loads it from the
+        outputs, checks]`` on the flat array ``x = [t, q, q̇, params, alpha, beta, taus,
+        cap]``, or None where it cannot (no LLVM in this SymEngine); ``llvm(build=False)`` only loads it from the
         on-disk cache. Non-finite outputs mean "take ``rfn``" (M not positive definite).
         Without a generated solve (``solves`` False: above ``FUSED_LIMIT`` unknowns) it is
         the kernel alone, ``f(x) -> fn's outputs`` on the same ``x``, and the model solves
@@ -75,6 +75,13 @@ class FusedKernel:
         ``pfn(t, q…, q̇…, *params) -> [P]``, the power Qᵀq̇ of the applied forces
         (:mod:`pfaff.derive.fusedpower`), generated on its first call; ``pfn.function()``
         (before it is pickled) makes it and returns it, or None when it cannot be made.
+    afn : callable or None
+        ``afn(t, y: list, params) -> [q̈, λ, checks]`` or None: a checked ``accelerations()``
+        on the generated Python (:func:`pfaff.numeric.checkedsolve.fused_accelerations`);
+        generated on its first call.
+    checks : int
+        How many pivot checks end the machine code's outputs (3, or 0 for machine code made
+        before they were: :func:`pfaff.numeric.checkedsolve.passes` reads them).
     """
 
     fn: Callable
@@ -93,6 +100,8 @@ class FusedKernel:
     solves: bool = True
     ops: int = 0
     pfn: Callable | None = None
+    afn: Callable | None = None
+    checks: int = 0
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);

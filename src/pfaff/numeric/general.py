@@ -173,7 +173,8 @@ class GeneralParts:
         except (PfaffError, ValueError, ArithmeticError, TypeError, RuntimeError) as e:
             return f"it could not be checked at a test state: {type(e).__name__}: {e}"
         k = 2 * n + m if fk.solves else 0  # the kernel alone: no q̈, λ of its own
-        ok = out.shape == (k + v.size,) and np.allclose(out[k:], v, rtol=1e-11, atol=1e-13)
+        ok = out.shape == (k + v.size + fk.checks,)
+        ok = ok and np.allclose(out[k : k + v.size], v, rtol=1e-11, atol=1e-13)
         if not fk.solves:
             return "" if ok else "it disagrees with the generated Python code at a test state"
         K = np.zeros((n + m, n + m))

@@ -125,7 +125,7 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
                     return out
             elif np.isfinite(out).all():
                 self._run_state["last"] = (t, q.tobytes(), qd.tobytes(), out[n : 2 * n + m])
-                return out[2 * n + m :]
+                return out[2 * n + m : out.size - fk.checks]
         try:
             v = np.array(fk.fn(t, *q.tolist(), *qd.tolist(), *self._p))
         except (ValueError, ArithmeticError) as e:  # math domain error, overflow, division by 0

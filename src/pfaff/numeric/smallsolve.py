@@ -43,6 +43,7 @@ class _Writer:
         self.count = 0
         self.prefix = prefix
         self.symbolic = symbolic  # no Python conditionals: the code runs on symbols too
+        self.pivots: list[tuple[str, str]] | None = None  # (pivot, diagonal entry), if recorded
 
     def let(self, expr: str | None) -> Entry:
         if expr is None:
@@ -61,6 +62,9 @@ class _Writer:
             diag = S[j][j] or "0.0"
             if acc is not None:
                 diag = f"{diag} - ({acc})"
+            if self.pivots is not None:  # the unfloored pivot, for the checks of a state
+                diag = self.let(diag) or diag
+                self.pivots.append((diag, S[j][j] or "0.0"))
             if tau and self.symbolic:  # one expression: Piecewise in the namespace's pick
                 diag = f"pick({self.let(diag)}, {tau[j]})"
             elif tau:  # the common case d >= τ costs one comparison, no call
@@ -154,6 +158,7 @@ def schur_source(
     prefix: str = "v",
     symbolic: bool = False,
     multipliers: list | None = None,
+    checks: list | None = None,
 ) -> tuple[list[str], list[str]]:
     """Lines (indented for a function body) computing q̈, and the n expressions of q̈.
 
@@ -162,7 +167,12 @@ def schur_source(
     are ``{prefix}1, {prefix}2, …``. ``shift``, ``tau`` and ``cap`` as in :func:`schur_solver`.
     ``symbolic``: no Python conditionals (the floor and the cap call ``pick`` and ``capped``), so
     that the lines also run on symbolic values (:func:`schur_expressions`). ``multipliers``: a
-    list that receives the m expressions of λ.
+    list that receives the m expressions of λ. ``checks``: a list that receives three
+    expressions a checked call reads (:func:`pfaff.numeric.checkedsolve.passes`): the smallest
+    Cholesky pivot of M over its diagonal entry's size (the pivot of the Jacobi-scaled M; a
+    negative one where M is not definite, even where the algebra of the symbolic solve has
+    cancelled the square roots that would fail), the same of S = A M⁻¹ Aᵀ (1.0 without
+    constraints), and the smallest diagonal entry of S over the largest.
 
     Examples
     --------
@@ -176,6 +186,8 @@ def schur_source(
     """
     n, m = len(Fs), len(cs)
     w = _Writer(prefix, symbolic)
+    if checks is not None:
+        w.pivots = []
     M: list[list[Entry]] = [[None] * n for _ in range(n)]
     for name, (i, j) in zip(Ms, mass, strict=True):
         M[i][j] = M[j][i] = name
@@ -201,7 +213,14 @@ def schur_source(
         top = w.let(f"{cap} * max({', '.join(S[i][i] or '0.0' for i in range(m))}, 0.0)")
         cap_of = "capped({0}, {1})" if symbolic else "{0} if {0} < {1} else {1}"
         tau = [w.let(cap_of.format(tj, top)) or tj for tj in tau]
+    if checks is not None:
+        checks.append(_smallest(w, [f"{d} / abs({s})" for d, s in w.pivots]))
+        w.pivots = []
     lam = w.solve(w.cholesky(S, tau), r) if m else []
+    if checks is not None:
+        diag = [S[i][i] or "0.0" for i in range(m)]
+        spread = f"{_smallest(w, diag)} / max({', '.join(diag)}, 0.0)" if m else "1.0"
+        checks += [_smallest(w, [f"{d} / abs({s})" for d, s in w.pivots]) if m else "1.0", spread]
     if multipliers is not None:
         multipliers.extend(x if x is not None else "0.0" for x in lam)
     out = []
@@ -212,6 +231,11 @@ def schur_source(
     return w.lines, out
 
 
+def _smallest(w: _Writer, exprs: list[str]) -> str:
+    """A variable holding the smallest of ``exprs`` (``min`` in the namespace the code runs in)."""
+    return w.let(exprs[0] if len(exprs) == 1 else f"min({', '.join(exprs)})") or "0.0"
+
+
 def schur_expressions(
     mass: list[tuple[int, int]],
     acon: list[tuple[int, int]],
@@ -219,23 +243,27 @@ def schur_expressions(
     n: int,
     m: int,
     namespace: dict,
+    checked: bool = False,
 ) -> list:
     """q̈ and λ (n + m) of the floored range-space solve as expressions: :func:`schur_source`'s lines (the same
     algorithm and floor) run on symbolic ``values`` for the names ``m{s}``, ``a{s}``, ``F{i}``,
     ``c{i}``, ``tau{j}`` and ``cap``; ``namespace`` gives ``sqrt``, ``max``, ``pick(d, tau)`` (the
-    floored pivot) and ``capped(tau, top)`` for that algebra.
+    floored pivot) and ``capped(tau, top)`` for that algebra (and ``min``, with ``checked``:
+    then the three check expressions of :func:`schur_source` follow λ).
     """
     Ms = [f"m{s}" for s in range(len(mass))]
     As = [f"a{s}" for s in range(len(acon))]
     Fs, cs = [f"F{i}" for i in range(n)], [f"c{i}" for i in range(m)]
     taus = [f"tau{j}" for j in range(m)]
     lam: list[str] = []
+    checks: list[str] | None = [] if checked else None
     lines, out = schur_source(
-        mass, acon, Ms, As, Fs, cs, tau=taus, cap="cap", symbolic=True, multipliers=lam
-    )
+        mass, acon, Ms, As, Fs, cs, tau=taus, cap="cap", symbolic=True, multipliers=lam,
+        checks=checks,
+    )  # fmt: skip
     names = [*Ms, *As, *Fs, *cs, *taus, "cap"]
     src = f"def schur({', '.join(names)}):\n" + "\n".join(lines)
-    src += f"\n    return [{', '.join(out + lam)}]\n"
+    src += f"\n    return [{', '.join(out + lam + (checks or []))}]\n"
     env = dict(namespace)
     exec(compile(src, "<pfaff.smallsolve symbolic>", "exec"), env)  # our own generated code
     return env["schur"](*(values[k] for k in names))
