@@ -25,15 +25,22 @@ from pfaff.core.stack import outside_pfaff
 from pfaff.derive.compile import build_model
 from pfaff.derive.compile_family import structured_model
 from pfaff.derive.equations import Derivation
+from pfaff.derive.family_rank import proves_full_rank
 from pfaff.numeric.rank import DENSE_LIMIT, dependent_rows, null_basis, redundant_sets
 from pfaff.numeric.redundant import dependency_names, onto_positions
 
 CONSISTENT = 1e-9  # a dependent row's residual on the manifold below this (relative): consistent
 
 
-def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> list[list[str]]:
+def check_constraint_rank(
+    eom: Derivation, seed: int = 20261122, small_instance: bool = True
+) -> list[list[str]]:
     """The sets of constraints that depend on one another everywhere (a warning names them), or
     :class:`ConstraintError` naming every row of an inconsistent set.
+
+    A family's full rank is proved on a small instance of its templates where its structure
+    allows (:func:`pfaff.derive.family_rank.proves_full_rank`; ``small_instance=False``: the
+    full check only, on a numeric model of full size).
 
     Examples
     --------
@@ -60,7 +67,9 @@ def check_constraint_rank(eom: Derivation, seed: int = 20261122) -> list[list[st
     tt = float(rng.uniform(0.1, 1.0))
     model = None
     with np.errstate(all="ignore"):
-        if eom.family:
+        if eom.family:  # its templates on a small instance first (issue 25), then in full
+            if small_instance and proves_full_rank(eom, values, tt, rng):
+                return []
             model = structured_model(eom, values, solver="none")
             if m <= n and model.proves_full_rank(tt, q):  # raises on a zero pivot
                 return []
