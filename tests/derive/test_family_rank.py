@@ -12,7 +12,7 @@ import pytest
 import sympy as sp
 
 import pfaff
-from pfaff.derive.family_rank import proves_full_rank
+from pfaff.derive.family_rank import closure_rows, proves_full_rank
 from pfaff.derive.rank import check_constraint_rank
 from pfaff.derive.templates import derive
 
@@ -44,19 +44,37 @@ def test_the_ring_is_proved_of_full_rank_as_the_full_check_finds(n: int) -> None
     assert small == full == [] and warned_small == warned_full == []
 
 
-@pytest.mark.parametrize("n", [3, 10, 200])
-def test_the_closed_ring_is_left_to_the_full_check(n: int) -> None:
-    """The closed ring (n + 1 rows on n + 1 coordinates): the N spacing rows sum to 0 = 0. The
-    small instance cannot prove full rank (there is none), so the full check runs and names the
-    spacing rows as one dependent set, with or without the small-instance step."""
-    proof, small, warned_small, full, warned_full = _both(
-        pfaff.models.rolling_ring(n, family=True, closed=True)
-    )
+@pytest.mark.parametrize("n", [3, 10, 300])
+def test_the_closed_ring_finds_the_full_checks_dependent_set(n: int) -> None:
+    """The closed ring (n + 1 rows on n + 1 coordinates): the n spacing rows sum to 0 = 0, one
+    dependent set. No proof of full rank (there is none); the closing row's w (A_Lᵀ w = −a_L,
+    one banded solve) names the same rows as the full check's null space of Aᵀ: with it above
+    the dense limit (n = 300), and always from :func:`closure_rows`."""
+    ring = pfaff.models.rolling_ring(n, family=True, closed=True)
+    proof, small, warned_small, full, warned_full = _both(ring)
     assert not proof
     assert small == full and warned_small == warned_full and len(warned_full) == 1
-    assert len(full) == 1 and "no slip" not in full[0]
-    if n <= 10:
-        assert full == [[f"spacing {i}" for i in range(1, n + 1)]]
+    assert full == [[f"spacing {i}" for i in range(1, n + 1)]]
+    with warnings.catch_warnings(record=True):
+        eom = derive(ring)
+    rows = closure_rows(eom, [0.9, 1.1], 0.3, np.random.default_rng(5))
+    assert rows is not None and rows.tolist() == list(range(1, n + 1))
+
+
+def test_an_independent_closing_row_is_full_rank_in_both() -> None:
+    """x − r θ_N after the open ring: A_L w = −a_L gives w with A_Gᵀ w + a_G ≠ 0 (the row moves
+    x against θ_N, which the ring's rows tie in another ratio): full rank, no warning."""
+    n = 250
+    ring = pfaff.models.rolling_ring(n, family=True)
+    x, last = ring.coordinates[0], ring.families[0][n]
+    ring.add_holonomic_constraint(x - 3 * last, name="extra")
+    proof, small, warned_small, full, warned_full = _both(ring)
+    assert not proof
+    assert small == full == [] and warned_small == warned_full == []
+    with warnings.catch_warnings(record=True):
+        eom = derive(ring)
+    rows = closure_rows(eom, [0.9, 1.1], 0.3, np.random.default_rng(5))
+    assert rows is not None and rows.size == 0
 
 
 def _wave(n: int, twice: bool = False) -> pfaff.System:

@@ -63,7 +63,14 @@ class LazySeq(Sequence):
 
 
 def concat(parts: Sequence[Sequence]) -> Sequence:
-    """Concatenate sequences lazily (a tuple when every part is short)."""
+    """Concatenate sequences lazily (a tuple when every part is short).
+
+    Examples
+    --------
+    >>> names = concat([["a", "b"], NumberedNames([], [("s", 1, 5000)])])
+    >>> names[1:4], names[-1]
+    (['b', 's1', 's2'], 's5000')
+    """
     total = sum(len(p) for p in parts)
     if total <= 4096:
         return tuple(x for p in parts for x in p)
@@ -76,7 +83,7 @@ class Concat(LazySeq):
     def __init__(self, parts: Sequence[Sequence]) -> None:
         self.parts = list(parts)
         self.starts = np.cumsum([0] + [len(p) for p in self.parts])
-        super().__init__(int(self.starts[-1]), self._one)
+        super().__init__(int(self.starts[-1]), self._one, self._many)
 
     def __reduce__(self) -> tuple:
         return (Concat, (self.parts,))
@@ -84,6 +91,17 @@ class Concat(LazySeq):
     def _one(self, i: int) -> object:
         j = int(np.searchsorted(self.starts, i, side="right")) - 1
         return self.parts[j][i - int(self.starts[j])]
+
+    def _many(self, lo: int, hi: int) -> list:
+        """Items lo … hi-1, each part sliced once (its own bulk where it has one)."""
+        out: list = []
+        for part, s0, s1 in zip(
+            self.parts, self.starts.tolist(), self.starts[1:].tolist(), strict=False
+        ):
+            a, b = max(lo, s0), min(hi, s1)
+            if a < b:
+                out += list(part[a - s0 : b - s0])
+        return out
 
 
 class NumberedNames(LazySeq):

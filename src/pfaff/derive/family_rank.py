@@ -17,10 +17,18 @@ alone:
   evaluated on a small instance: the template's kernel over :data:`SAMPLES` random points of its
   local coordinates (a constant entry is its value).
 
-Where this cannot conclude (no triangular structure: more rows than family members, a closed
-ring's redundant row, an entry that is zero or undefined at a sample, two diagonal entries on
-one row), :func:`proves_full_rank` says so and the full check runs as before, which finds and
-names the dependent sets or refuses the inconsistent ones.
+One more row than that structure takes (the closed ring's ``spacing N``, the last row, alone
+in its template) is :func:`closure_rows`: where every entry of the triangular rows is a constant
+of its template, A_L and the border columns A_G are known without a state, and the extra row a
+depends on the others exactly when the w of A_Lᵀ w = −a_L (one O(N) banded solve,
+:class:`pfaff.numeric.banded.LowerBand`) also gives A_Gᵀ w = −a_G; the rows where w is
+non-zero, and a, are then the one dependent set (what the full check's null space of Aᵀ
+finds). Its entries are sampled at a random point, as the full check's state is.
+
+Where this cannot conclude (no triangular structure: more rows than family members beyond one
+closing row, entries of the triangular rows that depend on the state, an entry that is zero or
+undefined at a sample, two diagonal entries on one row), both say so and the full check runs as
+before, which finds and names the dependent sets or refuses the inconsistent ones.
 """
 
 from __future__ import annotations
@@ -32,9 +40,12 @@ from types import SimpleNamespace
 import numpy as np
 
 from pfaff.derive.blocks import Block
+from pfaff.derive.codegen import constraint_layout
 from pfaff.derive.compile import con_streams
 from pfaff.derive.equations import Derivation
-from pfaff.numeric.streams import Index
+from pfaff.numeric.banded import LowerBand
+from pfaff.numeric.rank import SUPPORT_TOL
+from pfaff.numeric.streams import Index, scatter_add
 from pfaff.numeric.triangular import triangular_plan
 
 SAMPLES = 4  # random points at which each diagonal template entry must be non-zero
@@ -120,3 +131,78 @@ def _nonzero_on_small_instance(
         if not (np.isfinite(v).all() and (v != 0).all()):
             return False
     return True
+
+
+def closure_rows(
+    eom: Derivation, values: Sequence[float], t: float, rng: np.random.Generator
+) -> np.ndarray | None:
+    """The rows of the one dependent set of a family whose last row closes a triangular
+    structure (module docstring): empty when that row is independent (A has full rank), None
+    when this cannot tell.
+
+    Examples
+    --------
+    >>> import warnings, numpy as np, pfaff
+    >>> with warnings.catch_warnings(record=True):
+    ...     eom = pfaff.models.rolling_ring(5, family=True, closed=True).equations()
+    >>> closure_rows(eom, [1.0, 0.5], 0.3, np.random.default_rng(1)).tolist()  # spacing 1 … 5
+    [1, 2, 3, 4, 5]
+    """
+    m, n = eom.m, eom.n
+    if not eom.family or m < 2:
+        return None
+    params = tuple(eom.parameters)
+    blocks = [b for b in eom.blocks if b.local.kind != "dynamics"]
+    last = [
+        i for i, b in enumerate(blocks) if not b.family and b.n_inst == 1 and b.rows[0] == m - 1
+    ]
+    if not last:
+        return None
+    con = [con_streams(b, params, values, lazy=True) for b in blocks]
+    rest = [c for i, c in enumerate(con) if i != last[0]]
+    p = n - sum(len(f) for f in getattr(eom.system, "families", []))
+    plan = triangular_plan(SimpleNamespace(p=p, m=m - 1, n=n, con=rest))  # type: ignore[arg-type]
+    if plan is None:
+        return None
+    R, G = np.zeros((plan.w + 1, m - 1)), np.zeros((p, m - 1))
+    for into, entries in ((R, plan.band), (G, plan.border)):
+        for bi, ei, at, rows in entries:
+            value = rest[bi].acc.const[ei]  # (the template's code, made now: a few per family)
+            if value is None:
+                return None  # an entry that depends on the state: the full check evaluates it
+            scatter_add(into[at], rows, value)
+    band = LowerBand(R, constant=True)
+    if not (np.isfinite(R[0]).all() and (R[0] != 0).all()):
+        return None
+    a = _row_at_random_point(blocks[last[0]], params, values, t, n, rng)
+    if a is None:
+        return None
+    w = band.solve_t(-a[p:])
+    off = G @ w + a[:p] if p else np.zeros(0)
+    scale = (1.0 + np.abs(R).max() + np.abs(G).max(initial=0.0)) * (1.0 + np.abs(w).max())
+    if not np.isfinite(w).all() or (off.size and np.abs(off).max() > 1e-9 * scale):
+        return np.zeros(0, dtype=np.int64) if np.isfinite(w).all() else None
+    y = np.append(w, 1.0)
+    return np.flatnonzero(np.abs(y) > SUPPORT_TOL * np.linalg.norm(y)).astype(np.int64)
+
+
+def _row_at_random_point(
+    block: Block, params: tuple, values: Sequence[float], t: float, n: int,
+    rng: np.random.Generator,
+) -> np.ndarray | None:  # fmt: skip
+    """The one row of an ordinary constraint block at random values of its coordinates, as a
+    dense vector of length n; None where it is not finite there."""
+    cols = block.coords[0]
+    k = cols.size
+    small = Block(block.local, np.arange(k, dtype=np.int64)[None, :], np.zeros(1, np.int64), [])
+    part = con_streams(small, params, values)
+    q = rng.uniform(-1.3, 1.3, k)
+    with np.errstate(all="ignore"):
+        try:
+            out = part.acc(t, q, np.zeros_like(q))
+        except (ArithmeticError, ValueError):
+            return None
+    row = np.zeros(n)
+    for ei, a in enumerate(constraint_layout(block)[0]):  # (the order of the kernel's outputs)
+        row[cols[a]] += float(np.asarray(out[ei], dtype=float).ravel()[0])
+    return row if np.isfinite(row).all() else None
