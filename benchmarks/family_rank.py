@@ -14,6 +14,11 @@ the 2^24 build <= 5 s. For each N, one process, CPU seconds (``time.process_time
     ``rolling_ring(N, force=True).equations()`` (with the small check) and ``.compile(values)``
     once; ``build`` is their sum, ``old build`` = build − small + full (N <= ``--full-max``)
 
+``--closed``: the closed ring instead (``closed=True``: N + 1 rows, the N spacing rows one
+dependent set), whose small check is :func:`pfaff.derive.family_rank.closure_rows` (one banded
+solve) above the dense limit; the full check finds the null space of the sparse Aᵀ by inverse
+iteration (keep ``--full-max`` small: 2^16 took about a second).
+
 Run (from the project root)::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/family_rank.py
@@ -44,8 +49,8 @@ def cpu(fn) -> float:
     return time.process_time() - start
 
 
-def row(n: int, rounds: int, full_max: int) -> str:
-    ring = pfaff.models.rolling_ring(n, force=True, family=True)
+def row(n: int, rounds: int, full_max: int, closed: bool = False) -> str:
+    ring = pfaff.models.rolling_ring(n, force=True, family=True, closed=closed)
     made: list = []
     eqs = cpu(lambda: made.append(ring.equations()))
     eom = made[0]
@@ -73,6 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sizes", type=int, nargs="+", default=SIZES)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--full-max", type=int, default=2**22)
+    ap.add_argument("--closed", action="store_true", help="the closed ring (one redundant row)")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
     print(
@@ -81,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     print("| N | small | full | old build | equations | compile | build |")
     print("|---|---|---|---|---|---|---|")
     for n in args.sizes:
-        print(row(n, args.rounds, args.full_max), flush=True)
+        print(row(n, args.rounds, args.full_max, args.closed), flush=True)
         gc.collect()
     return 0
 
