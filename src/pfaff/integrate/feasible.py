@@ -39,11 +39,13 @@ def refuse_dense_ida(size: int, n: int) -> None:
 
     Examples
     --------
+    The second is refused by time, or first by memory where little is free:
+
     >>> refuse_dense_ida(500, 200)
     >>> refuse_dense_ida(20_000, 6_000)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    pfaff.core.errors.OptionError: method 'ida' on 6000 coordinates factors a dense Newton matrix ...
+    pfaff.core.errors.OptionError: method 'ida' on 6000 coordinates ...
     """
     refuse_beyond(
         3 * 8.0 * size * size,  # the Newton matrix, its LU and our copy, float64
