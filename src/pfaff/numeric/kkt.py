@@ -63,7 +63,6 @@ FLOOR = 1e-5  # τ_j / s_j in the integrators' right-hand side
 ZERO_ROW = 1e-12  # a row's reference size is at least this fraction of the largest
 RESCALE_BELOW = 1e-3  # rows this much smaller than the largest get their reference refreshed
 STATE_FLOOR = 1e-15  # τ / max diag S for a single state
-LEAST_PIVOT = 1e-300  # τ at least this: every row vanished (A = 0 at a point) floors, not 0/0
 _potrf = scipy.linalg.lapack.dpotrf
 _potrs = scipy.linalg.lapack.dpotrs
 _trtrs = scipy.linalg.lapack.dtrtrs
@@ -71,15 +70,13 @@ _gesv = scipy.linalg.lapack.dgesv
 
 
 def floored(d: float, tau: float) -> float:
-    """The pivot floor: d where d >= τ, else τ/2 + d²/(2τ) (C¹, at least τ/2; d < 0 counts as 0;
-    τ at least ``LEAST_PIVOT``).
+    """The pivot floor: d where d >= τ, else τ/2 + d²/(2τ) (C¹, at least τ/2; d < 0 counts as 0).
 
     Examples
     --------
-    >>> floored(3.0, 1.0), floored(0.0, 1.0), floored(-5.0, 1.0), floored(0.0, 0.0) > 0
-    (3.0, 0.5, 0.5, True)
+    >>> floored(3.0, 1.0), floored(0.0, 1.0), floored(-5.0, 1.0)
+    (3.0, 0.5, 0.5)
     """
-    tau = max(tau, LEAST_PIVOT)
     if d >= tau:
         return d
     d = max(d, 0.0)
@@ -94,9 +91,9 @@ def floored_array(d: np.ndarray, tau: np.ndarray | float) -> np.ndarray:
     >>> floored_array(np.array([3.0, 0.0, -5.0]), 1.0).tolist()
     [3.0, 0.5, 0.5]
     """
-    tau = np.maximum(np.asarray(tau, dtype=float), LEAST_PIVOT)
+    tau = np.asarray(tau, dtype=float)
     low = np.maximum(d, 0.0)
-    return np.where(d >= tau, d, 0.5 * tau + low * low / (2.0 * tau))
+    return np.where(d >= tau, d, 0.5 * tau + low * low / (2.0 * np.where(tau > 0, tau, 1.0)))
 
 
 def augmentation_weight(M: np.ndarray, A: np.ndarray) -> float:
