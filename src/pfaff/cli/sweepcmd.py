@@ -87,6 +87,9 @@ def _sweep(args: argparse.Namespace) -> int:
             raise OptionError(f"--output must be a netCDF file (.nc), got {args.output!r}")
         if not out.parent.is_dir() and str(out.parent):
             raise OptionError(f"--output: folder {str(out.parent)!r} does not exist")
+        from pfaff.cli.main import not_an_input
+
+        not_an_input(args, ["output"])
     scheduler = args.scheduler
     start = time.perf_counter()
     ds = sweep(
