@@ -154,3 +154,30 @@ def test_a_fit_plot_linked_to_the_data_is_refused(
     assert main(argv) == 2
     assert "is the data file this command reads" in capsys.readouterr().err
     assert data.read_text().startswith("t,x,y")
+
+
+# ---------------------------------------------------------------- numeric: a model without inertia
+def test_a_urdf_link_without_inertia_is_an_inertia_error(tmp_path: Path) -> None:
+    """A joint that moves only a link without <inertial>: M = 0, no entry at all (the KKT
+    pattern of no entries was a raw ValueError); now the inertia check names the joint."""
+    inertial = (
+        '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+        "</inertial>"
+    )
+    path = tmp_path / "r.urdf"
+    path.write_text(
+        f'<robot name="r"><link name="base">{inertial}</link><link name="a"/>'
+        '<joint name="j0" type="continuous"><parent link="base"/><child link="a"/>'
+        '<axis xyz="0 0 1"/></joint></robot>'
+    )
+    model = pfaff.load_urdf(path).equations().compile({})
+    with pytest.raises(pfaff.InertiaError, match="`j0` is undetermined"):
+        model.accelerations(0.0, [0.0], [1.0])
+
+
+# ---------------------------------------------------------------- api.fit: data whose squares overflow
+def test_fit_of_data_beyond_the_squares_range() -> None:
+    model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    t, measured = np.array([0.0, 0.1]), np.full((2, 1), 1e200)
+    with pytest.raises(OptionError, match=r"`measured` has values beyond ±1e\+150"):
+        pfaff.fit(model, t, measured, {"g": 9.0}, ["x"], [1.0, 0.0], [0.0, 0.0])
