@@ -18,7 +18,7 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from pfaff.cli.argtypes import finite, positive, whole
+from pfaff.cli.argtypes import finite, not_an_input, positive, whole
 from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import fail, guarded
 from pfaff.cli.signals import interrupted, interrupts, signalled, stage
@@ -282,23 +282,6 @@ def _distinct_files(args: argparse.Namespace) -> None:
             )
         seen[real] = flag
     not_an_input(args, [f for f in ("output", "plot", "animate") if getattr(args, f, None)])
-
-
-def not_an_input(args: argparse.Namespace, flags: Sequence[str]) -> None:
-    """Refuse an output that is one of the command's input files (the model file, the data),
-    by name or through a link: writing it would replace the input."""
-    inputs = {
-        os.path.realpath(path): name
-        for name in ("model", "data")
-        if isinstance(path := getattr(args, name, None), str)
-    }
-    for flag in flags:
-        name = inputs.get(os.path.realpath(getattr(args, flag)))
-        if name is not None:
-            raise OptionError(
-                f"--{flag} {getattr(args, flag)!r} is the {name} file this command reads: "
-                "writing it would replace it; give the output its own name"
-            )
 
 
 def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
