@@ -21,6 +21,8 @@ from pfaff.core.errors import OptionError, SimulationError, StateError
 from pfaff.integrate.sensitivity import sensitivities
 from pfaff.numeric.checks import check_model
 
+HUGE = 1e150  # |measured| beyond this: the squared residuals overflow
+
 
 @dataclass(repr=False)
 class FitResult:
@@ -160,6 +162,11 @@ def _data(t: object, measured: object, n_obs: int) -> tuple[np.ndarray, np.ndarr
         )
     if not np.isfinite(y).all():
         raise OptionError("`measured` contains NaN or infinity")
+    if np.abs(y).max(initial=0.0) > HUGE:  # the sum of squared residuals would overflow
+        raise OptionError(
+            f"`measured` has values beyond ±{HUGE:g} ({np.abs(y).max():.3g}): their squares "
+            "overflow; measure in other units"
+        )
     return ts, y
 
 

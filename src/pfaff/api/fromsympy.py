@@ -355,6 +355,11 @@ def _with_parameters(pieces: _Pieces, parameters: Mapping | Sequence | None) -> 
                 raise ModelError(f"`parameters`: {key!r} is not a symbol of the model")
             subs[sym] = _value(key, value)
     elif parameters is not None:
+        if isinstance(parameters, str | bytes) or not isinstance(parameters, Sequence | set):
+            raise ModelTypeError(
+                "`parameters` must be a mapping of symbols or names to values, or a list of "
+                f"names, got {type(parameters).__name__} {parameters!r:.80}"
+            )
         declared = {p if isinstance(p, str) else getattr(p, "name", p) for p in parameters}
         stray = sorted((s for s in free if s.name not in declared), key=str)
         if stray:

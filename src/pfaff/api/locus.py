@@ -14,6 +14,8 @@ from pfaff.core.errors import ModelError, ModelTypeError
 from pfaff.core.keywords import checked_keywords
 from pfaff.derive.linearize import linearize
 
+MAX_VALUES = 100_000  # values of one varied parameter (an eigenvalue problem each)
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -105,6 +107,8 @@ def _values(values: object, name: str) -> np.ndarray:
     out = raw.astype(float).ravel()
     if not out.size or not np.all(np.isfinite(out)):
         raise ModelError("`vary`: give at least one value, every one finite")
+    if out.size > MAX_VALUES:  # one eigenvalue problem each: a million takes hours
+        raise ModelError(f"`vary['{name}']`: {out.size} values, more than {MAX_VALUES}")
     return out
 
 

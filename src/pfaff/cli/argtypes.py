@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+import os
+from collections.abc import Callable, Sequence
+
+from pfaff.core.errors import OptionError
 
 
 def finite(s: str) -> float:
@@ -56,3 +59,20 @@ def whole(
         return v
 
     return parse
+
+
+def not_an_input(args: argparse.Namespace, flags: Sequence[str]) -> None:
+    """Refuse an output that is one of the command's input files (the model file, the data),
+    by name or through a link: writing it would replace the input."""
+    inputs = {
+        os.path.realpath(path): name
+        for name in ("model", "data")
+        if isinstance(path := getattr(args, name, None), str)
+    }
+    for flag in flags:
+        name = inputs.get(os.path.realpath(getattr(args, flag)))
+        if name is not None:
+            raise OptionError(
+                f"--{flag} {getattr(args, flag)!r} is the {name} file this command reads: "
+                "writing it would replace it; give the output its own name"
+            )

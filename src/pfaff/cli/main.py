@@ -18,10 +18,10 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from pfaff.cli.argtypes import finite, positive, whole
+from pfaff.cli.argtypes import finite, not_an_input, positive, whole
 from pfaff.cli.jsontext import dumps
-from pfaff.cli.report import guarded
-from pfaff.cli.signals import stage
+from pfaff.cli.report import fail, guarded
+from pfaff.cli.signals import interrupted, interrupts, signalled, stage
 from pfaff.core.errors import OptionError
 
 # the simulation options imply --simulate when given; these are their defaults
@@ -281,6 +281,7 @@ def _distinct_files(args: argparse.Namespace) -> None:
                 f"--{seen[real]} and --{flag} are the same file {path!r}: give each its own name"
             )
         seen[real] = flag
+    not_an_input(args, [f for f in ("output", "plot", "animate") if getattr(args, f, None)])
 
 
 def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
@@ -410,6 +411,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         shows the traceback), 2 a usage, model, value or file error, 3 a simulation that failed or
         was interrupted, 130 interrupted (Ctrl-C) before a simulation.
     """
+    try:  # from the start: the parser imports the stages (seconds), an interrupt there is one line
+        with interrupts():
+            return _main(argv)
+    except KeyboardInterrupt as e:  # (a command's own interrupts are reported by `guarded`)
+        return fail(*interrupted(e), False)
+    except Exception as e:
+        if (stopped := signalled(e)) is None:  # an interrupt turned into another error, or a bug
+            raise
+        return fail(*stopped, False)
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    """:func:`main` inside the interrupt path."""
+    stage("starting")
     parser = build_parser()
     args = parser.parse_args(argv)
     debug = bool(getattr(args, "debug", False))

@@ -11,7 +11,7 @@ import sys
 import traceback
 from collections.abc import Callable
 
-from pfaff.cli.signals import interrupted, interrupts
+from pfaff.cli.signals import interrupted, interrupts, signalled
 from pfaff.core.errors import PfaffError, raised_in_generated_code
 
 
@@ -40,7 +40,7 @@ def fail(message: str, code: int, debug: bool) -> int:
     """Print ``pfaff: message`` (after the traceback with ``debug``) and return ``code``."""
     if debug:
         traceback.print_exc()
-    print(f"pfaff: {message}", file=sys.stderr)
+    sys.stderr.write(f"pfaff: {message}\n")  # one write: a second signal cannot split it
     return code
 
 
@@ -55,14 +55,23 @@ def guarded(action: Callable[[], int], debug: bool) -> int:
             return action()
     except KeyboardInterrupt as e:  # Ctrl-C or SIGTERM, at any stage (pfaff.cli.signals)
         return fail(*interrupted(e), debug)
-    except (PfaffError, OSError) as e:
-        return fail(f"error: {one_line(str(e))}", 2, debug)
-    except (ValueError, ArithmeticError) as e:
-        if not raised_in_generated_code(e):
-            return fail(unexpected(e), 1, debug)
-        # overflow, domain error or division by zero in the model's equations at these values
-        return fail(
-            f"error: the equations cannot be evaluated with these values ({describe(e)})", 2, debug
-        )
     except Exception as e:
-        return fail(unexpected(e), 1, debug)
+        return fail(*outcome(e), debug)
+
+
+def outcome(e: Exception) -> tuple[str, int]:
+    """The one line and exit code of an error that ended a command (see the module).
+
+    Examples
+    --------
+    >>> outcome(FileNotFoundError("no such file: run.toml"))
+    ('error: no such file: run.toml', 2)
+    """
+    if (stopped := signalled(e)) is not None:  # an interrupt another library turned into its own
+        return stopped
+    if isinstance(e, PfaffError | OSError):
+        return f"error: {one_line(str(e))}", 2
+    if isinstance(e, ValueError | ArithmeticError) and raised_in_generated_code(e):
+        # overflow, domain error or division by zero in the model's equations at these values
+        return f"error: the equations cannot be evaluated with these values ({describe(e)})", 2
+    return unexpected(e), 1

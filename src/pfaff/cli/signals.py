@@ -1,11 +1,13 @@
 """One interrupt path for every command and stage: Ctrl-C and SIGTERM end it the same way.
 
-While a command runs, SIGINT raises ``KeyboardInterrupt`` (Python's own handler, put back if
-something replaced it) and SIGTERM raises :class:`Terminated`, a ``KeyboardInterrupt`` too, so
-that whatever stage is running unwinds as it does for Ctrl-C: a simulation returns what it has
+From the start of :func:`pfaff.cli.main.main` (``import pfaff`` loads no stage: the stages
+import inside it) to its end, SIGINT raises ``KeyboardInterrupt`` and SIGTERM raises
+:class:`Terminated`, a ``KeyboardInterrupt`` too (the handlers are put back if something replaced
+them), so that whatever stage is running unwinds as it does for Ctrl-C: a simulation returns what it has
 (status "interrupted"; the command writes it and exits 3), a write in progress removes its
 temporary file and leaves the old one (:mod:`pfaff.core.files`), anything else ends with one line,
-``pfaff: interrupted`` (exit 130) or ``pfaff: terminated`` (exit 143, 128 + SIGTERM).
+``pfaff: interrupted`` (exit 130) or ``pfaff: terminated`` (exit 143, 128 + SIGTERM), also when
+a library turned the interrupt into an error of its own (NumPy importing its C extension).
 
 ``PFAFF_VERBOSE=1`` prints each stage on stderr as it starts (``pfaff: deriving``...), and the
 progress bar of a simulation.
@@ -26,6 +28,9 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM, raised where the process is, and handled as Ctrl-C is."""
 
 
+_RECEIVED: list[int] = []  # the signals the handlers below raised on, since `interrupts` began
+
+
 @contextlib.contextmanager
 def interrupts() -> Iterator[None]:
     """SIGINT and SIGTERM raise while the block runs; the previous handlers come back after."""
@@ -33,7 +38,8 @@ def interrupts() -> Iterator[None]:
         yield
         return
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    _RECEIVED.clear()  # (a command run in this process before: its signals are its own)
+    signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _terminate)
     try:
         yield
@@ -42,8 +48,31 @@ def interrupts() -> Iterator[None]:
         signal.signal(signal.SIGTERM, before[1])
 
 
+def _interrupt(signum: int, frame: FrameType | None) -> None:
+    _RECEIVED.append(signum)
+    raise KeyboardInterrupt
+
+
 def _terminate(signum: int, frame: FrameType | None) -> None:
+    _RECEIVED.append(signum)
     raise Terminated
+
+
+def signalled(e: BaseException) -> tuple[str, int] | None:
+    """The one line and exit code when ``e`` ends a command because of a signal: an interrupt,
+    or another error raised while one unwound (NumPy, importing its C extension, turns a
+    KeyboardInterrupt into an ImportError); None for any other error.
+
+    Examples
+    --------
+    >>> signalled(Terminated()), signalled(ValueError("not a signal")) is None
+    (('terminated', 143), True)
+    """
+    if isinstance(e, KeyboardInterrupt):
+        return interrupted(e)
+    if not _RECEIVED:
+        return None
+    return interrupted(Terminated() if _RECEIVED[-1] == signal.SIGTERM else KeyboardInterrupt())
 
 
 def interrupted(e: KeyboardInterrupt) -> tuple[str, int]:
@@ -67,4 +96,5 @@ def verbose() -> bool:
 def stage(name: str) -> None:
     """Announce a stage on stderr (with ``PFAFF_VERBOSE``)."""
     if verbose():
-        print(f"pfaff: {name}", file=sys.stderr, flush=True)
+        sys.stderr.write(f"pfaff: {name}\n")  # one write: an interrupt cannot split the line
+        sys.stderr.flush()

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from pfaff.cli.argtypes import positive, whole
+from pfaff.cli.argtypes import not_an_input, positive, whole
 from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import guarded, one_line
 from pfaff.core.errors import OptionError
@@ -87,6 +87,7 @@ def _sweep(args: argparse.Namespace) -> int:
             raise OptionError(f"--output must be a netCDF file (.nc), got {args.output!r}")
         if not out.parent.is_dir() and str(out.parent):
             raise OptionError(f"--output: folder {str(out.parent)!r} does not exist")
+        not_an_input(args, ["output"])
     scheduler = args.scheduler
     start = time.perf_counter()
     ds = sweep(

@@ -16,6 +16,29 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from pfaff.core.errors import OptionError
+
+
+def file_path(path: object, name: str = "path") -> Path:
+    """``path`` as a :class:`~pathlib.Path`, or an :class:`~pfaff.errors.OptionError` naming
+    the argument when it is no file path (a number, None).
+
+    Examples
+    --------
+    >>> file_path("run.csv")
+    PosixPath('run.csv')
+    >>> file_path(3)
+    Traceback (most recent call last):
+    pfaff.core.errors.OptionError: `path` must be a file path (str or os.PathLike); got int 3
+    """
+    text = os.fspath(path) if isinstance(path, str | os.PathLike) else None
+    if not isinstance(text, str) or not text or "\x00" in text:
+        raise OptionError(
+            f"`{name}` must be a file path (str or os.PathLike); got "
+            f"{type(path).__name__} {path!r:.80}"
+        )
+    return Path(text)
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[Path]:
@@ -30,7 +53,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     >>> target.read_text()
     'hello'
     """
-    target = Path(path)
+    target = file_path(path)
     if target.is_symlink():  # write where the link points, and keep the link
         target = Path(os.path.realpath(target))
     folder = target.parent if str(target.parent) else Path(".")

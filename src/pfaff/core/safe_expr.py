@@ -60,6 +60,7 @@ __all__ = [
     "MAX_NAME_LENGTH",
     "MAX_NODES",
     "MAX_ROOT_DIGITS",
+    "MAX_WRITTEN_OUT",
     "RESERVED_NAMES",
     "ExpressionError",
     "check_name",
@@ -76,6 +77,9 @@ MAX_DIGITS = 1000
 MAX_ROOT_DIGITS = 100
 """Most digits of a number whose root SymPy may be made to extract (it factors it)."""
 MAX_NODES = 20_000
+# nodes of an expression with the values of the names it uses written out (a file's [[inputs]]:
+# each may use the ones before it twice, doubling at each level)
+MAX_WRITTEN_OUT = 10 * MAX_NODES
 """Most nodes of the syntax tree of one expression."""
 MAX_NAME_LENGTH = 100
 """Longest name :func:`check_name` accepts."""
@@ -439,6 +443,33 @@ def _location(text: str, lead: int, lineno: int, col: int) -> str:
     return f"line {line}, column {col + 1}" if "\n" in text else f"column {col + 1}"
 
 
+def tree_size(expr: sp.Basic) -> int:
+    """The nodes of ``expr`` as a tree: a subexpression shared n times counts n times (what a
+    traversal, a derivative or printed code costs), found in one pass over the distinct ones.
+
+    Examples
+    --------
+    >>> x = sp.Symbol("x")
+    >>> u = x + 1
+    >>> for _ in range(40):
+    ...     u = sp.Mul(u, u + x, evaluate=False)
+    >>> tree_size(x), tree_size(x + 1), tree_size(u) > 2**40
+    (1, 3, True)
+    """
+    sizes: dict[int, int] = {}
+    stack: list[tuple[sp.Basic, bool]] = [(expr, False)]
+    while stack:
+        node, ready = stack.pop()
+        if id(node) in sizes:
+            continue
+        if ready:
+            sizes[id(node)] = 1 + sum(sizes[id(a)] for a in node.args)
+            continue
+        stack.append((node, True))
+        stack.extend((a, False) for a in node.args if id(a) not in sizes)
+    return sizes[id(expr)]
+
+
 def _digits(r: sp.Rational) -> float:
     """Decimal digits of the numerator plus those of the denominator."""
     p, q = int(r.p), int(r.q)
@@ -522,6 +553,8 @@ class _Builder:
         self.text, self.body, self.lead, self.where = text, body, lead, where
         self.names, self.functions, self.subscripts = names, functions, subscripts or {}
         self.allow_dot, self.max_depth = allow_dot, max_depth
+        self.written_out = 0  # the nodes the names' values add, written out as trees
+        self.sizes: dict[str, int] = {}  # each name's value's tree_size
 
     # -- errors -------------------------------------------------------------------------------
 
@@ -685,7 +718,17 @@ class _Builder:
         name = node.id
         self.plain(node, name)
         if name in self.names:
-            return self.names[name]
+            value = self.names[name]
+            if name not in self.sizes:
+                self.sizes[name] = tree_size(value)
+            self.written_out += self.sizes[name] - 1
+            if self.written_out > MAX_WRITTEN_OUT:
+                raise self.error(
+                    node,
+                    f"the expression, with the values of the names it uses written out, has more "
+                    f"than {MAX_WRITTEN_OUT} terms (inputs built from inputs double at each level)",
+                )
+            return value
         if name in CONSTANTS:
             return CONSTANTS[name]
         if name in self.functions or (name == "dot" and self.allow_dot):

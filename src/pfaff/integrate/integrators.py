@@ -10,6 +10,8 @@ Two separate ideas, each a :class:`pfaff.integrate.stepper.Stepper` (the contrac
   KKT system ask for A q̈ + Ȧq̇ + ḃ = −2α (A q̇ + b) − β² f, so that the drift obeys a damped
   linear equation rather than growing.
 
+Both fail a run whose constraints can no longer be met (:mod:`pfaff.integrate.reach`).
+
 Small fused models run DOP853 on Python floats (:mod:`pfaff.integrate.fastrk`), others SciPy's solvers.
 """
 
@@ -20,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pfaff.core.errors import OptionError
+from pfaff.integrate.reach import DriftWatch, unreached
 from pfaff.integrate.stepper import Power, Stepper, StepperOptions
 from pfaff.integrate.work import checked_sum, dense_work
 from pfaff.numeric.projection import Projector
@@ -29,7 +32,6 @@ if TYPE_CHECKING:
     from scipy.integrate import OdeSolver
 
 RK_METHODS = ("DOP853", "RK45", "RK23")  # SciPy's explicit Runge–Kutta solvers, by name
-UNREACHED = 1e6  # a projected state this many times constraint_tol off the constraints: failed
 
 
 def rk_solver(name: str) -> type[OdeSolver]:
@@ -163,14 +165,9 @@ class ProjectedRK(_RKStepper):
         q, qd = self.state()
         q, qd, changed = self.projector(t, q, qd)
         if changed:
-            reached = self.projector.residual(t, q, qd)
-            if reached > UNREACHED * self.projector.tol:
-                self.fail(
-                    f"the constraints cannot be satisfied at t = {t:.17g}: after projection "
-                    f"max(|f|, |A q̇ + b|) = {reached:.3g} (constraint_tol "
-                    f"{self.projector.tol:.3g}); they may have become inconsistent (a rheonomic "
-                    "constraint driving the system where no configuration satisfies them all)"
-                )
+            why = unreached(self.projector, t, q, qd)
+            if why is not None:
+                self.fail(why)
             s = self.solver
             self._y_raw = s.y  # the step's interpolant ends here (see dense)
             s.y = np.concatenate([q, qd])
@@ -196,3 +193,12 @@ class BaumgarteRK(_RKStepper):
     ) -> None:
         fun = model.ode_function(options.alpha, options.beta, start=(t0, q0, qd0))
         self._start(fun, t0, np.concatenate([q0, qd0]), t_end, options)
+        self.watch = DriftWatch(projector)
+
+    def step(self) -> None:
+        """One step; the run fails where the drift it lets grow cannot be projected away
+        (:mod:`pfaff.integrate.reach`)."""
+        super().step()
+        why = self.watch(self.t, *self.state())
+        if why is not None:
+            self.fail(why)

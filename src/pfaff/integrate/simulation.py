@@ -555,6 +555,12 @@ class _Run:
         self.QD.append(np.array(qd))
         self.W.append(w)
 
+    def _trim(self) -> None:
+        """The recorded states cut to one length (an interrupt between two appends)."""
+        k = min(len(self.T), len(self.Q), len(self.QD), len(self.W))
+        for rows in (self.T, self.Q, self.QD, self.W):
+            del rows[k:]
+
     def _dense_report(self, st: Stepper, points: list, work: float) -> None:
         """Record the states at ``points`` (t, event index or None) inside the last step, in
         time order, from its dense output; an event's state also goes to :attr:`records`."""
@@ -653,6 +659,7 @@ class _Run:
                     bar.update(st.t - t_prev)
         except KeyboardInterrupt:
             status, message = "interrupted", f"interrupted by the user at t = {st.t:.17g}"
+            self._trim()
         except _RunFailure as e:
             status, message = "failed", f"{e.verb} at t = {st.t:.17g}: {e}"
             hint = e.hint and self.events

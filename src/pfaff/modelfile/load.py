@@ -71,6 +71,7 @@ import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError, ModelWarning, ParameterError
+from pfaff.core.files import file_path
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.safe_expr import (
     ExpressionError,
@@ -205,7 +206,7 @@ def load_model(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> ModelF
     >>> mf.system.equations().mass_matrix, mf.q0.tolist()
     (Matrix([[l**2*m]]), [0.5])
     """
-    p = Path(path)
+    p = file_path(path)
     data = _read(p, max_bytes)
     return _Loader(p, data).load()
 

@@ -34,12 +34,12 @@ import re
 import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError
+from pfaff.core.files import file_path
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.stack import outside_pfaff
 from pfaff.core.symbols import coordinates as make_coordinates
@@ -180,7 +180,7 @@ def _stops(system: System, restitution: float) -> None:
 
 def _read(path: str | os.PathLike) -> str:
     """The file's text, its size capped and DOCTYPE/ENTITY declarations refused."""
-    p = Path(path)
+    p = file_path(path)
     try:
         with p.open("rb") as f:
             raw = f.read(MAX_BYTES + 1)

@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ModelTypeError, StateError
+from pfaff.core.errors import ConstraintError, ModelTypeError, StateError
 from pfaff.core.lazy import NumberedNames
 from pfaff.numeric.checks import check_finite, check_state
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
@@ -358,7 +358,9 @@ class StreamModel(Quantities, ModelValue):
         Returns
         -------
         dict
-            ``qdd`` (k, n), ``multipliers`` (k, m), ``f`` and ``g`` (k, m), and (k,) arrays ``T``,
+            ``qdd`` (k, n), ``multipliers`` (k, m) (NaN at a state where the augmented matrix is
+            singular: a run may pass through one, where a constraint's gradient vanishes),
+            ``f`` and ``g`` (k, m), and (k,) arrays ``T``,
             ``V``, ``T0`` = T(q, 0, t) and ``T2`` (the part of T quadratic in q̇). One kernel pass
             per state for the energies (T, V, T₀ and T₂ together). ``f`` and ``g`` are views of
             ``residual`` (k, 2, m), the layout of ``Trajectory.constraint_residual``, so that a
@@ -372,7 +374,10 @@ class StreamModel(Quantities, ModelValue):
         out |= {key: np.zeros(k) for key in ("T", "V", "T0", "T2")}
         for i in range(k):
             ti, qi, qdi = self._state(t[i], q[i], qd[i])
-            _, out["multipliers"][i] = self._solve(ti, qi, qdi, out=out["qdd"][i])
+            try:
+                _, out["multipliers"][i] = self._solve(ti, qi, qdi, out=out["qdd"][i])
+            except ConstraintError:  # the KKT matrix singular at this state (every row of a
+                out["qdd"][i] = out["multipliers"][i] = np.nan  # constraint vanishing): undefined
             out["f"][i], out["g"][i] = self.residual(ti, qi, qdi)
             for part in self.dyn:
                 for key, v in zip(("T", "V", "T0", "T2"), part.energies(ti, qi, qdi), strict=True):

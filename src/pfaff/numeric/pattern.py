@@ -51,7 +51,8 @@ class KKTPattern:
         ends = np.cumsum([len(r) for r in rows], dtype=np.int64).tolist()
         const = np.zeros(lin.size)
         self._varying: list = []  # (source, dense positions, CSC slots, (each distinct?) × 2)
-        for a, b, c, src in zip([0, *ends[:-1]], ends, consts, sources, strict=True):
+        starts = [0, *ends[:-1]] if ends else []  # (no entry at all: a model without inertia)
+        for a, b, c, src in zip(starts, ends, consts, sources, strict=True):
             if c is not None:
                 const[a:b] = c
             else:

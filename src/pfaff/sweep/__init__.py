@@ -6,19 +6,18 @@ parameter values given at run time through :meth:`pfaff.NumericModel.with_parame
 results come back as one :class:`xarray.Dataset` (:mod:`.result`).
 """
 
-from pfaff.sweep.driver import sweep
-from pfaff.sweep.grid import Grid, make_grid, parse_vary
-from pfaff.sweep.result import write_netcdf
-from pfaff.sweep.summary import summary
-from pfaff.sweep.worker import SweepSpec, run_batch
+from pfaff.core.exports import lazy_exports
 
-__all__ = [
-    "Grid",
-    "SweepSpec",
-    "make_grid",
-    "parse_vary",
-    "run_batch",
-    "summary",
-    "sweep",
-    "write_netcdf",
-]
+# imported when first used: ``import pfaff`` imports this package (see pfaff/__init__.py)
+_EXPORTS = {
+    "Grid": "pfaff.sweep.grid",
+    "SweepSpec": "pfaff.sweep.worker",
+    "make_grid": "pfaff.sweep.grid",
+    "parse_vary": "pfaff.sweep.grid",
+    "run_batch": "pfaff.sweep.worker",
+    "summary": "pfaff.sweep.overview",
+    "sweep": "pfaff.sweep.driver",
+    "write_netcdf": "pfaff.sweep.result",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import xarray as xr
 
 from pfaff.core.display import number, summary_html
-from pfaff.sweep.summary import summary
+from pfaff.sweep.overview import summary
 
 
 class SweepDataset(xr.Dataset):

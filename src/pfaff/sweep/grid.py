@@ -16,6 +16,7 @@ import numpy as np
 from pfaff.core.errors import OptionError
 
 RESERVED = ("time", "coordinate", "multiplier", "constraint")  # dimensions of the result
+MAX_COUNT = 1_000_000  # values of one --vary axis (a grid of more runs is refused later, by memory)
 
 
 @dataclass(frozen=True)
@@ -178,6 +179,6 @@ def parse_vary(text: str) -> tuple[str, np.ndarray]:
         count = int(parts[2])
     except ValueError:
         count = 0
-    if count < 1:
-        raise OptionError(f"{usage}; COUNT must be a whole number of at least 1")
+    if not 1 <= count <= MAX_COUNT:
+        raise OptionError(f"{usage}; COUNT must be a whole number from 1 to {MAX_COUNT}")
     return name, np.linspace(start, stop, count)
