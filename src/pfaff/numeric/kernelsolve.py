@@ -16,8 +16,12 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.linalg
 
+from pfaff.numeric.evaluator import preallocated
 from pfaff.numeric.kkt import solve_floored
+
+_posv = scipy.linalg.lapack.dposv
 
 if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
@@ -81,14 +85,22 @@ def kernel_rhs(
     alpha, beta, floor, scales = solve
     M, A = K[:n, :n], K[n:, :n]
     isfinite = math.isfinite
+    call = preallocated(compiled, buf)
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        v = compiled(buf)
+        v = call()
         flat[index] = v[source]
+        if not m:  # M q̈ = Q − h: one LAPACK call, Cholesky in place (K.T: Fortran order)
+            _, x, info = _posv(K.T, v[o0:o1], overwrite_a=1, overwrite_b=1)
+            qdd = x.tolist()
+            if info == 0 and isfinite(sum(qdd)):  # else not positive definite, or not finite
+                stats["kkt_solves"] += 1
+                return yl[n:] + qdd
+            return slow(t, yl)
         c = v[o1:o2]
         if alpha:
             c = c - 2.0 * alpha * (A @ buf[1 + n : 1 + 2 * n] + v[o2:o3])
