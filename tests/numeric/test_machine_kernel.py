@@ -121,9 +121,8 @@ def test_kernel_machine_code_pickles_with_the_model() -> None:
 
 
 def test_the_optimization_level_follows_the_size() -> None:
+    assert OPTIMIZED_LIMIT >= 65  # the 64-link chain on a cart: optimized (split, grouped)
     assert machine_opt_level(OPTIMIZED_LIMIT, 0) == 2
-    assert machine_opt_level(OPTIMIZED_LIMIT - 3, 4) == 0
-    assert machine_opt_level(MACHINE_LIMIT, 0) == 0
     assert machine_opt_level(MACHINE_LIMIT, 1) is None
 
 

@@ -8,11 +8,15 @@ Python kernel was most of a call: one right-hand side of the 32-link chain on a 
 is compiled by SymEngine's LLVM backend and the model solves the assembled KKT system with LAPACK
 (``benchmarks/engines.py``).
 
-SymEngine's LLVM compile time grows quickly with the kernel's size, so the optimization level
-is chosen from the size (:func:`pfaff.numeric.evaluator.machine_opt_level`; a rule on n + m,
-never a timing) and the result is kept in the on-disk cache (:mod:`pfaff.derive.cache`) as the
-whole right-hand side of a small system is; above :data:`pfaff.numeric.evaluator.MACHINE_LIMIT`
-there is no machine code and the model evaluates as before.
+SymEngine's LLVM compile time grows quickly with the kernel's size (about as n^4.5 for the
+chain on a cart as it came: 4.4–5.8 s at 32 unknowns, 32 s at 48). Three levers keep it bounded,
+all rules on sizes, never timings: sums of parameters are grouped first
+(:func:`collect_parameters`: the chain's mass matrix O(n³) -> O(n²) operations), the kernel is
+split into LLVM functions of at most :data:`KERNEL_CHUNK` outputs (:class:`SplitKernel`), and
+the optimization level follows n + m (:func:`pfaff.numeric.evaluator.machine_opt_level`). The
+result is kept in the on-disk cache (:mod:`pfaff.derive.cache`) as the whole right-hand side of
+a small system is; above :data:`pfaff.numeric.evaluator.MACHINE_LIMIT` there is no machine
+code and the model evaluates as before.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import contextlib
 import pickle
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import symengine
 
 from pfaff.derive import cache
@@ -28,6 +33,8 @@ from pfaff.numeric.evaluator import machine_opt_level
 
 if TYPE_CHECKING:
     from collections.abc import Callable
+
+KERNEL_CHUNK = 512  # outputs per machine-code function of a kernel (:class:`SplitKernel`)
 
 
 def cached_machine(
@@ -92,7 +99,58 @@ def _kernel(exprs: list, args: list, m: int, level: int) -> Callable:
     inputs += [se.Symbol(f"_tau{j}") for j in range(m)] + [se.Symbol("_cap")]
     params = {a for a in inputs if str(a).startswith("_p")}
     outs = collect_parameters([se.sympify(e) for e in exprs], params)
-    return se.Lambdify(inputs, outs, backend="llvm", cse=True, real=True, opt_level=level)
+    count = -(-len(outs) // KERNEL_CHUNK)  # functions, of equal numbers of outputs
+    step = -(-len(outs) // count) if outs else 1
+    chunks = [outs[a : a + step] for a in range(0, max(len(outs), 1), step)]
+    return SplitKernel(
+        [
+            se.Lambdify(inputs, chunk, backend="llvm", cse=True, real=True, opt_level=level)
+            for chunk in chunks
+        ],
+        [len(chunk) for chunk in chunks],
+    )
+
+
+class SplitKernel:
+    """Machine-code functions of the same input whose outputs, side by side, are the kernel's.
+
+    SymEngine's LLVM compile time grows faster than the function (the 64-link chain on a cart,
+    its sums grouped, at opt_level 2: 11.3 s as one function of 2210 outputs, 4.1 s as four of
+    553, measured on this project's busy machine; the same call time, 18 µs): so the kernel is
+    compiled as functions of at most :data:`KERNEL_CHUNK` outputs, each with its own common
+    subexpressions (those shared across functions are computed once in each: sines and cosines
+    of the angles, sums of parameters). It is called like one of SymEngine's functions.
+
+    Attributes
+    ----------
+    parts : list
+        The LLVM functions (``LLVMDouble``), in output order; ``parts[k]`` writes
+        ``out[offsets[k] : offsets[k + 1]]``.
+    offsets : list of int
+
+    Examples
+    --------
+    >>> import symengine as se
+    >>> x = se.Symbol("x")
+    >>> f = SplitKernel([se.Lambdify([x], [x, 2 * x], backend="llvm"),
+    ...                  se.Lambdify([x], [se.cos(x)], backend="llvm")], [2, 1])
+    >>> f(np.array([0.0])).tolist()
+    [0.0, 0.0, 1.0]
+    """
+
+    def __init__(self, parts: list, sizes: list[int]) -> None:
+        self.parts = parts
+        self.offsets = [0, *np.cumsum(sizes).tolist()]
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        out = np.empty(self.offsets[-1])
+        self.unsafe_real(np.ascontiguousarray(x, dtype=float), out)
+        return out
+
+    def unsafe_real(self, x: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = kernel(x)``, unchecked: x and out contiguous float64 of the right sizes."""
+        for part, start in zip(self.parts, self.offsets):  # noqa: B905 - one more offset
+            part.unsafe_real(x, out, 0, start)
 
 
 def collect_parameters(exprs: list, params: set) -> list:
