@@ -5,8 +5,11 @@ Above ``FUSED_LIMIT`` unknowns the machine code is the fused kernel alone
 matrix from its outputs and solves it by the range-space method with the floor
 (:func:`pfaff.numeric.kkt.solve_floored`, the algorithm of the model's ``range-space`` solver),
 without the assembly of :meth:`pfaff.NumericModel._kkt` (a new matrix per call, the velocity
-residual). On the 32-link chain on a cart (33 unknowns) this is about a tenth of the generated
-Python kernel's right-hand side (``benchmarks/engines.py``).
+residual); without constraints, M q̈ = Q − h by one in-place Cholesky solve (``dposv``) on M's
+upper triangle written straight from the kernel's outputs. The kernel is called through its
+unchecked entry point into a preallocated array (:func:`pfaff.numeric.evaluator.preallocated`).
+On the 32-link chain on a cart (33 unknowns) this right-hand side costs about 1.3–1.6× Pinocchio's
+``aba`` (``benchmarks/engines.py``).
 """
 
 from __future__ import annotations
@@ -79,28 +82,27 @@ def kernel_rhs(
     buf = np.zeros(1 + 2 * n + len(fixed))
     buf[1 + 2 * n :] = fixed
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    call = preallocated(compiled, buf)
+
+    def load(t: float, yl: list) -> np.ndarray:
+        buf[0] = t
+        buf[1 : 1 + 2 * n] = yl
+        if live is not None:
+            buf[p0:p1] = live
+        return call()
+
+    if not m:
+        return _cholesky_rhs(fk, load, n, slow, stats)
     K = np.zeros((N, N))
     flat = K.reshape(-1)  # a view: the pattern's entries are refilled, the rest stays zero
     index, source = fk.kkt_index, fk.kkt_source
     alpha, beta, floor, scales = solve
     M, A = K[:n, :n], K[n:, :n]
     isfinite = math.isfinite
-    call = preallocated(compiled, buf)
 
     def rhs(t: float, yl: list) -> list:
-        buf[0] = t
-        buf[1 : 1 + 2 * n] = yl
-        if live is not None:
-            buf[p0:p1] = live
-        v = call()
+        v = load(t, yl)
         flat[index] = v[source]
-        if not m:  # M q̈ = Q − h: one LAPACK call, Cholesky in place (K.T: Fortran order)
-            _, x, info = _posv(K.T, v[o0:o1], overwrite_a=1, overwrite_b=1)
-            qdd = x.tolist()
-            if info == 0 and isfinite(sum(qdd)):  # else not positive definite, or not finite
-                stats["kkt_solves"] += 1
-                return yl[n:] + qdd
-            return slow(t, yl)
         c = v[o1:o2]
         if alpha:
             c = c - 2.0 * alpha * (A @ buf[1 + n : 1 + 2 * n] + v[o2:o3])
@@ -113,5 +115,35 @@ def kernel_rhs(
         stats["kkt_solves"] += 1
         out = yl[n:] + qdd
         return out if isfinite(sum(qdd)) else slow(t, yl)
+
+    return rhs
+
+
+def _cholesky_rhs(
+    fk: FusedKernel,
+    load: Callable[[float, list], np.ndarray],
+    n: int,
+    slow: Callable[[float, list], list],
+    stats: dict,
+) -> Callable[[float, list], list]:
+    """:func:`kernel_rhs` without constraints: M q̈ = Q − h by one LAPACK call (``dposv``, the
+    Cholesky factorization in place), M's upper triangle written straight from the kernel's
+    outputs (in output order: ``entry_index``); the array path where M is not positive
+    definite or q̈ is not finite."""
+    W = np.zeros((n, n))
+    wflat, upper, o0 = W.reshape(-1), fk.entry_index, fk.offsets[0]
+    isfinite = math.isfinite
+
+    def rhs(t: float, yl: list) -> list:
+        v = load(t, yl)
+        W.fill(0.0)  # (the last factor and its fill-in where M has structural zeros)
+        wflat[upper] = v[:o0]
+        # W.T in Fortran order, its lower triangle W's upper one
+        _, x, info = _posv(W.T, v[o0 : o0 + n], lower=1, overwrite_a=1, overwrite_b=1)
+        qdd = x.tolist()
+        if info == 0 and isfinite(sum(qdd)):
+            stats["kkt_solves"] += 1
+            return yl[n:] + qdd
+        return slow(t, yl)
 
     return rhs
