@@ -89,7 +89,7 @@ def kernel_factory(
     level = machine_opt_level(n, m)
     if level is None:
         return None
-    return cached_machine(key, f"grouped{level}", lambda: _kernel(*parts(), m, level))
+    return cached_machine(key, f"kernel{level}", lambda: _kernel(*parts(), m, level))
 
 
 def _kernel(exprs: list, args: list, m: int, level: int) -> Callable:
