@@ -14,9 +14,12 @@ The rule (:func:`choose`): the template kernels where there is no fused kernel (
 solver other than ``range-space``, or a function the printer cannot write); else machine code
 from :data:`MACHINE_FROM` unknowns n + m on (up to :data:`MACHINE_LIMIT`; above
 ``FUSED_LIMIT`` it is the kernel alone, solved with LAPACK, its LLVM optimization level by
-:func:`machine_opt_level`), where one call of it (about 17–20 µs through SymEngine's checked
-call, 3–4 µs through :func:`preallocated`) beats the generated Python, which costs 1 µs on a pendulum, 9 µs at n + m = 4
-and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
+:func:`machine_opt_level`), where one call of it beats the generated Python: through the
+unchecked entry point into a preallocated array (:func:`preallocated`) the machine-code right-hand
+side of the chain on a cart costs 2.3, 2.4, 2.7 and 2.8 µs at n + m = 3, 4, 5 and 6 against
+2.2, 3.5, 5.3 and 7.7 µs in generated Python (1.0 against 2.1 µs on a pendulum; measured on
+this project's busy machine), so machine code from n + m = 4 on (through SymEngine's checked
+call, 17–20 µs, it paid only from 8 on);
 or from :data:`MACHINE_OPS` operations in the kernel's generated code (a spatial 6R arm of six
 unknowns: 1700 operations, 90 µs per right-hand side in generated Python against 14 µs in
 machine code; a cart with 4 links, 250 operations, 13 µs either way, ``benchmarks/engines.py``);
@@ -41,7 +44,7 @@ from pfaff.core.errors import OptionError
 from pfaff.core.stack import outside_pfaff
 
 EVALUATORS = ("template", "python", "machine")
-MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
+MACHINE_FROM = 4  # n + m from which machine code is the default evaluator
 MACHINE_OPS = 500  # operations of the fused kernel from which machine code is, at any n + m
 OPTIMIZED_LIMIT = 72  # n + m up to which LLVM optimizes the machine code (opt_level 2)
 MACHINE_LIMIT = 72  # n + m up to which the fused kernel is compiled to machine code at all
