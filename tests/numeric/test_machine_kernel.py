@@ -247,14 +247,15 @@ def test_a_mass_matrix_with_structural_zeros_is_solved_afresh_each_call(
 
 
 @pytest.mark.slow
-def test_the_split_optimized_kernel_at_41_unknowns_matches_the_template_kernels() -> None:
+def test_the_split_optimized_kernel_at_41_unknowns_matches_the_generated_python() -> None:
     """The 40-link chain on a cart (41 unknowns): grouped, split, optimized machine code by the
-    rule, the same right-hand side as the template kernels (NumPy, no SymEngine code)."""
+    rule, the same right-hand side as the generated Python kernel (its sums as derived, not
+    grouped) solved by the array path. (The template kernels took 450 s here.)"""
     s = pfaff.models.n_link_pendulum_on_cart(40)
     eom = s.equations()
     values = cart_parameters(eom)
     machine = eom.compile(values)
-    template = eom.compile(values, evaluator="template")
+    template = eom.compile(values, evaluator="python")
     rng = np.random.default_rng(4)
     y = rng.uniform(-0.5, 0.5, 82)
     got, want = machine.ode_function()(0.0, y), template.ode_function()(0.0, y)
