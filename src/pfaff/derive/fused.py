@@ -23,7 +23,7 @@ from pfaff.core.symbols import accel, t
 from pfaff.derive import cache
 from pfaff.derive.engine import engine_safe
 from pfaff.derive.fusedpower import power_expression
-from pfaff.derive.machine_kernel import cached_machine, collect_parameters, kernel_factory
+from pfaff.derive.machine_kernel import cached_machine, kernel_factory
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.generated import Portable, register
 from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
@@ -456,9 +456,8 @@ def _kernel_parts(eom: Derivation) -> tuple[list, list]:
 
 def _llvm_rhs(mass: list, acon: list, exprs: list, n: int, m: int, args: list) -> Callable:
     se = symengine
+    ex = [se.sympify(e) for e in exprs]
     syms = [se.Symbol(str(a)) for a in args]  # _t, _y…, _p…
-    params = {a for a in syms if str(a).startswith("_p")}
-    ex = collect_parameters([se.sympify(e) for e in exprs], params)
     y = syms[1 : 2 * n + 1]
     alpha, beta, cap = se.Symbol("_alpha"), se.Symbol("_beta"), se.Symbol("_cap")
     taus = [se.Symbol(f"_tau{j}") for j in range(m)]
