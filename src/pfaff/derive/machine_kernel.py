@@ -162,7 +162,11 @@ def collect_parameters(exprs: list, params: set) -> list:
     kernel of the 64-link chain on a cart: 2.9e5 µs a call at opt_level 0). Grouped, the sums of
     parameters are shared between entries by the common subexpressions and M costs O(n²)
     (33 unknowns: 20 400 operations after CSE -> 9 000, the call 9.7 -> 5.8 µs, the compile at
-    opt_level 2 3.5 -> 1.1 s). Equal up to rounding (the sums are reassociated).
+    opt_level 2 3.5 -> 1.1 s). Equal up to rounding (the sums are reassociated). Used for the
+    kernel alone, not for the whole right-hand side of small systems
+    (:func:`pfaff.derive.fused.build_fused`): there, through the 24 folds of the square
+    four-bar in ``tests/integrate/test_simulate_fourbar.py``, it moved the angle after 10 s by
+    9e-6 instead of 1.2e-7 (the kernel alone, grouped, solved with LAPACK: 9e-8).
 
     Parameters
     ----------
