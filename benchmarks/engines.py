@@ -263,6 +263,14 @@ def timed(fns: dict[str, Callable[[], object]], rounds: int, calls: int) -> dict
     return {k: statistics.median(v) for k, v in times.items()}
 
 
+def _machine(timings: dict) -> str:
+    """The machine code's kind, and for a kernel its LLVM opt level and count of functions."""
+    kind = str(timings.get("machine_kind", ""))
+    if "machine_functions" in timings:
+        kind += f", O{timings.get('machine_opt_level')} × {timings['machine_functions']}"
+    return kind
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--links", type=int, nargs="+", default=[2, 4, 8, 16, 31, 32, 48, 64])
@@ -294,7 +302,7 @@ def main(argv: list[str] | None = None) -> None:
             f"{now / aba:.2f}", f"{now / mj:.2f}",
             "" if before is None else f"{before:.1f}",
             "" if before is None else f"{before / now:.1f}",
-            f"{model.evaluator} ({timings.get('machine_kind', '')})",
+            f"{model.evaluator} ({_machine(timings)})",
             f"{timings.get('codegen', 0.0):.2f}", f"{timings.get('machine_code', 0.0):.2f}",
         ]  # fmt: skip
         print("| " + " | ".join(cells) + " |", flush=True)

@@ -14,6 +14,7 @@ import sympy as sp
 import pfaff
 from methods import ALL_METHODS
 from pfaff.errors import ModelTypeError, OptionError, ParameterError
+from pfaff.numeric.evaluator import MACHINE_FROM
 
 ROUND_TRIP = """
 import pickle, sys
@@ -110,9 +111,9 @@ def test_evaluators_agree_and_are_reported() -> None:
         results[evaluator] = model.accelerations(0.0, q, qd)[0]
     np.testing.assert_allclose(results["python"], results["template"], rtol=1e-12)
     np.testing.assert_allclose(results["machine"], results["template"], rtol=1e-12)
-    # the rule: the generated Python below 8 unknowns, machine code from there on
-    assert s.equations().compile({}).evaluator == "python"
-    assert chain(8).equations().compile({}).evaluator == "machine"
+    # the rule: the generated Python below MACHINE_FROM unknowns, machine code from there on
+    assert chain(MACHINE_FROM - 1).equations().compile({}).evaluator == "python"
+    assert chain(MACHINE_FROM).equations().compile({}).evaluator == "machine"
     with pytest.raises(OptionError, match="`evaluator` must be one of"):
         s.equations().compile({}, evaluator="fortran")
     ring = pfaff.models.rolling_ring(4, force=True, family=True).equations()

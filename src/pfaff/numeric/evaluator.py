@@ -14,9 +14,12 @@ The rule (:func:`choose`): the template kernels where there is no fused kernel (
 solver other than ``range-space``, or a function the printer cannot write); else machine code
 from :data:`MACHINE_FROM` unknowns n + m on (up to :data:`MACHINE_LIMIT`; above
 ``FUSED_LIMIT`` it is the kernel alone, solved with LAPACK, its LLVM optimization level by
-:func:`machine_opt_level`), where one call of it (about 17–20 µs, most of it the
-call's own overhead) beats the generated Python, which costs 1 µs on a pendulum, 9 µs at n + m = 4
-and 34 µs at n + m = 8 (measured in this session, ``/tmp``-free: see the issue's closing note);
+:func:`machine_opt_level`), where one call of it beats the generated Python: through the
+unchecked entry point into a preallocated array (:func:`preallocated`) the machine-code right-hand
+side of the chain on a cart costs 2.3, 2.4, 2.7 and 2.8 µs at n + m = 3, 4, 5 and 6 against
+2.2, 3.5, 5.3 and 7.7 µs in generated Python (1.0 against 2.1 µs on a pendulum; measured on
+this project's busy machine), so machine code from n + m = 4 on (through SymEngine's checked
+call, 17–20 µs, it paid only from 8 on);
 or from :data:`MACHINE_OPS` operations in the kernel's generated code (a spatial 6R arm of six
 unknowns: 1700 operations, 90 µs per right-hand side in generated Python against 14 µs in
 machine code; a cart with 4 links, 250 operations, 13 µs either way, ``benchmarks/engines.py``);
@@ -41,26 +44,27 @@ from pfaff.core.errors import OptionError
 from pfaff.core.stack import outside_pfaff
 
 EVALUATORS = ("template", "python", "machine")
-MACHINE_FROM = 8  # n + m from which machine code is the default evaluator
+MACHINE_FROM = 4  # n + m from which machine code is the default evaluator
 MACHINE_OPS = 500  # operations of the fused kernel from which machine code is, at any n + m
-OPTIMIZED_LIMIT = 40  # n + m up to which LLVM optimizes the machine code (opt_level 2)
+OPTIMIZED_LIMIT = 72  # n + m up to which LLVM optimizes the machine code (opt_level 2)
 MACHINE_LIMIT = 72  # n + m up to which the fused kernel is compiled to machine code at all
 
 
 def machine_opt_level(n: int, m: int) -> int | None:
     """SymEngine's LLVM ``opt_level`` for the machine code of a system of n + m unknowns, or None
-    where none is made: the compile time of the kernel alone grows faster than its size
-    (the kernel of the chain on a cart, CPU seconds on this project's busy 2-core machine: at 33
-    unknowns 2.5 s at level 2 against 0.5 s at level 0, for a call 1.45× faster; at 41, 9.8 s
-    against 1.4 s, 1.8× faster; at 65, 9 s at level 0 and level 1 already 83 s), so the
-    optimizer runs up to :data:`OPTIMIZED_LIMIT` (about 10 s of compilation, once: the result
-    is cached on disk), level 0 up to :data:`MACHINE_LIMIT`, and above that the model keeps the
-    generated Python kernel (a rule on the sizes, never a timing).
+    where none is made: the compile time of the kernel alone grows faster than its size. Its
+    sums of parameters grouped and split into functions of at most 512 outputs
+    (:mod:`pfaff.derive.machine_kernel`), the kernel of the chain on a cart compiles at level 2
+    in 1.1 s at 33 unknowns, 4.1 s at 65 and 5.8 s at 72 (CPU seconds on this project's busy
+    2-core machine; 11.3 s at 65 as one function, and before the grouping 2.5 s at 33 and 9.8 s
+    at 41), so the optimizer runs up to :data:`OPTIMIZED_LIMIT` (once: the result is cached on
+    disk), level 0 up to :data:`MACHINE_LIMIT`, and above that the model keeps the generated
+    Python kernel (a rule on the sizes, never a timing).
 
     Examples
     --------
-    >>> machine_opt_level(33, 0), machine_opt_level(48, 1), machine_opt_level(100, 0)
-    (2, 0, None)
+    >>> machine_opt_level(33, 0), machine_opt_level(64, 1), machine_opt_level(100, 0)
+    (2, 2, None)
     """
     size = n + m
     if size > MACHINE_LIMIT:
@@ -185,6 +189,32 @@ class MachineCode:
         self.compiled, self._done = state["compiled"], state["done"]
 
 
+def preallocated(compiled: Callable, buf: np.ndarray) -> Callable[[], np.ndarray]:
+    """``call() -> out``: ``compiled(buf)`` written into one array allocated here, through the
+    unchecked entry point of SymEngine's LLVM functions (``unsafe_real``: no argument checks,
+    no new array; about 1 µs a call of a small function against 8 µs through ``compiled(buf)``,
+    measured on this project's machine); ``compiled(buf)`` where there is no such entry point.
+    ``buf`` (float64, contiguous) is the input the caller refills; ``out`` is overwritten by the
+    next call.
+
+    Examples
+    --------
+    >>> call = preallocated(lambda x: 2.0 * x, np.array([1.0, 3.0]))
+    >>> call().tolist()
+    [2.0, 6.0]
+    """
+    fast = getattr(compiled, "unsafe_real", None)
+    if fast is None:
+        return lambda: compiled(buf)
+    out = np.empty(len(compiled(buf)))
+
+    def call() -> np.ndarray:
+        fast(buf, out)
+        return out
+
+    return call
+
+
 def machine_rhs(
     compiled: Callable, py: Callable, n: int, fixed: list, live: list | None = None
 ) -> Callable:
@@ -198,13 +228,14 @@ def machine_rhs(
     isfinite = math.isfinite
     k = 2 * n
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    call = preallocated(compiled, buf)
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        out = compiled(buf)[:k].tolist()  # (``out=`` measured 5 % slower: its shape checks)
+        out = call()[:k].tolist()
         return out if isfinite(sum(out)) else py(t, yl)
 
     return rhs

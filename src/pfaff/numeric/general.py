@@ -143,13 +143,15 @@ class GeneralParts:
     def _record_machine(self, mc: MachineCode) -> None:
         """The machine code's kind and cost in ``timings``: ``machine_code`` (CPU seconds to
         build or load it), ``machine_kind`` (``"rhs"``: the whole right-hand side;
-        ``"kernel+LAPACK"``: the kernel alone) and, for the latter, ``machine_opt_level``."""
+        ``"kernel+LAPACK"``: the kernel alone) and, for the latter, ``machine_opt_level`` and
+        ``machine_functions`` (the LLVM functions it is split into)."""
         fk = self._fused_kernel
         timings = self.timings  # type: ignore[attr-defined]
         timings["machine_code"] = mc.seconds
         timings["machine_kind"] = "rhs" if fk is None or fk.solves else "kernel+LAPACK"
         if fk is not None and not fk.solves:
             timings["machine_opt_level"] = machine_opt_level(self.n, self.m)  # type: ignore[attr-defined]
+            timings["machine_functions"] = len(getattr(mc.compiled, "parts", [mc.compiled]))
         if mc.compiled is None:
             timings["machine_kind"] = "unavailable"
 

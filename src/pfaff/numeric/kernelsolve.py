@@ -5,8 +5,11 @@ Above ``FUSED_LIMIT`` unknowns the machine code is the fused kernel alone
 matrix from its outputs and solves it by the range-space method with the floor
 (:func:`pfaff.numeric.kkt.solve_floored`, the algorithm of the model's ``range-space`` solver),
 without the assembly of :meth:`pfaff.NumericModel._kkt` (a new matrix per call, the velocity
-residual). On the 32-link chain on a cart (33 unknowns) this is about a tenth of the generated
-Python kernel's right-hand side (``benchmarks/engines.py``).
+residual); without constraints, M q̈ = Q − h by one in-place Cholesky solve on the kernel's
+outputs (``dppsv`` in packed storage, or ``dposv``). The kernel is called through its
+unchecked entry point into a preallocated array (:func:`pfaff.numeric.evaluator.preallocated`).
+On the 32-link chain on a cart (33 unknowns) this right-hand side costs about 1.3–1.6× Pinocchio's
+``aba`` (``benchmarks/engines.py``).
 """
 
 from __future__ import annotations
@@ -16,8 +19,14 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.linalg
 
+from pfaff.numeric.evaluator import preallocated
 from pfaff.numeric.kkt import solve_floored
+
+_posv = scipy.linalg.lapack.dposv
+_ppsv = scipy.linalg.lapack.dppsv
+PACKED_LIMIT = 48  # n up to which a dense M is solved in packed storage (``dppsv``)
 
 if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
@@ -75,6 +84,17 @@ def kernel_rhs(
     buf = np.zeros(1 + 2 * n + len(fixed))
     buf[1 + 2 * n :] = fixed
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    call = preallocated(compiled, buf)
+
+    def load(t: float, yl: list) -> np.ndarray:
+        buf[0] = t
+        buf[1 : 1 + 2 * n] = yl
+        if live is not None:
+            buf[p0:p1] = live
+        return call()
+
+    if not m:
+        return _cholesky_rhs(fk, load, n, slow, stats)
     K = np.zeros((N, N))
     flat = K.reshape(-1)  # a view: the pattern's entries are refilled, the rest stays zero
     index, source = fk.kkt_index, fk.kkt_source
@@ -83,11 +103,7 @@ def kernel_rhs(
     isfinite = math.isfinite
 
     def rhs(t: float, yl: list) -> list:
-        buf[0] = t
-        buf[1 : 1 + 2 * n] = yl
-        if live is not None:
-            buf[p0:p1] = live
-        v = compiled(buf)
+        v = load(t, yl)
         flat[index] = v[source]
         c = v[o1:o2]
         if alpha:
@@ -101,5 +117,51 @@ def kernel_rhs(
         stats["kkt_solves"] += 1
         out = yl[n:] + qdd
         return out if isfinite(sum(qdd)) else slow(t, yl)
+
+    return rhs
+
+
+def _cholesky_rhs(
+    fk: FusedKernel,
+    load: Callable[[float, list], np.ndarray],
+    n: int,
+    slow: Callable[[float, list], list],
+    stats: dict,
+) -> Callable[[float, list], list]:
+    """:func:`kernel_rhs` without constraints: M q̈ = Q − h by one LAPACK call, the Cholesky
+    factorization in place; the array path where M is not positive definite or q̈ is not
+    finite. Where M's pattern is its whole upper triangle row by row (a chain's) and n is at
+    most :data:`PACKED_LIMIT`, the kernel's outputs already are M in LAPACK's packed storage
+    (column-major lower = row-major upper) and ``dppsv`` solves on them with no copy (33
+    unknowns: 8.1 µs against 10.4 µs for the matrix form; equal at 65, where the blocked
+    ``dposv`` on the full matrix is as fast); else M's upper triangle is written from the
+    outputs (``entry_index``) into a matrix zeroed each call (the last factor's fill-in where M
+    has structural zeros) for ``dposv``."""
+    o0 = fk.offsets[0]
+    upper = fk.entry_index
+    rows, cols = np.triu_indices(n)
+    isfinite = math.isfinite
+    if n <= PACKED_LIMIT and np.array_equal(upper, rows * n + cols):
+
+        def solve(v: np.ndarray) -> tuple[np.ndarray, int]:
+            return _ppsv(n, v[:o0], v[o0 : o0 + n], lower=1, overwrite_b=1)
+
+    else:
+        W = np.zeros((n, n))
+        wflat = W.reshape(-1)
+
+        def solve(v: np.ndarray) -> tuple[np.ndarray, int]:
+            W.fill(0.0)
+            wflat[upper] = v[:o0]
+            # W.T in Fortran order, its lower triangle W's upper one
+            return _posv(W.T, v[o0 : o0 + n], lower=1, overwrite_a=1, overwrite_b=1)[1:]
+
+    def rhs(t: float, yl: list) -> list:
+        x, info = solve(load(t, yl))
+        qdd = x.ravel().tolist()
+        if info == 0 and isfinite(sum(qdd)):
+            stats["kkt_solves"] += 1
+            return yl[n:] + qdd
+        return slow(t, yl)
 
     return rhs
