@@ -60,6 +60,8 @@ class StructuredModel(StreamModel):
     ('triangular', 2.0, -1.0)
     """
 
+    sparse_dae = True  # IDA's Newton matrix in CSC (pfaff.numeric.ggl)
+
     def __init__(
         self,
         n: int,
