@@ -14,6 +14,16 @@ exact blocks for λ, μ and y', forward differences for the q and v columns of s
 pendulum 5x fewer steps than leaving the curvature terms ∂(Aᵀλ)/∂q and ∂(A v)/∂q out, which larger
 systems do to keep each iteration cheap), and a small regularization of the algebraic diagonal so
 that it stays invertible where a linkage folds flat and A loses rank.
+
+A family model (``model.sparse_dae``) takes the same residual and Newton matrix over its template
+streams instead, in CSC (:class:`pfaff.numeric.ggl.GGLNewton`: exact blocks, and the state
+derivatives of each template's outputs by differences in its local coordinates), factored by
+SciPy's SuperLU as the exact preconditioner of IDA's GMRES, which then converges in one
+iteration until c_j drifts and IDA keeps the factors over several steps. Not scikit-sundae's
+``linsolver="sparse"``: SuperLU_MT there pivots by magnitude with no ordering choice, and on the
+ring (4096 members, 1 s) it took 243 steps and 250 factorizations, 8.6 s, against 125 steps,
+47 factorizations and 1.1 s this way (CPU, the machine busy). ``ida_jacobian`` given: the dense
+path, for any model (refused by size as before).
 """
 
 from __future__ import annotations
