@@ -19,11 +19,13 @@ A family model (``model.sparse_dae``) takes the same residual and Newton matrix 
 streams instead, in CSC (:class:`pfaff.numeric.ggl.GGLNewton`: exact blocks, and the state
 derivatives of each template's outputs by differences in its local coordinates), factored by
 SciPy's SuperLU as the exact preconditioner of IDA's GMRES, which then converges in one
-iteration until c_j drifts and IDA keeps the factors over several steps. Not scikit-sundae's
-``linsolver="sparse"``: SuperLU_MT there pivots by magnitude with no ordering choice, and on the
-ring (4096 members, 1 s) it took 243 steps and 250 factorizations, 8.6 s, against 125 steps,
-47 factorizations and 1.1 s this way (CPU, the machine busy). ``ida_jacobian`` given: the dense
-path, for any model (refused by size as before).
+iteration until c_j drifts and IDA keeps the factors over several steps. scikit-sundae's
+``linsolver="sparse"`` (SuperLU_MT with this matrix as ``jacfn``) does as well in time (ring of
+2^16, 1 s: 44 steps, 12.4 s against 43 steps, 11.5 s; CPU, the machine busy) but chooses its
+own pivots by magnitude with no ordering option: where they fill in, SuperLU_MT runs out of its
+preallocated storage and aborts the process (the ring of 1024 before the x row was weighted),
+where SciPy raises an error a run can report. ``ida_jacobian`` given: the dense path, for any
+model (refused by size as before).
 """
 
 from __future__ import annotations

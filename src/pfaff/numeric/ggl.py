@@ -18,10 +18,10 @@ J = ∂F/∂y + c_j ∂F/∂y' is assembled in CSC on a pattern fixed once:
   whose x row meets every angle's column.
 
 An equation coupled to every instance (the ring's x row: M_xθ_k and ∂h_x/∂θ_k for every k) is
-weighted by 2⁻⁵⁰ (residual and Newton row alike: the same Newton corrections). SUNDIALS'
-SuperLU_MT pivots by magnitude (threshold 1): unweighted, that row is chosen as a pivot early and
-the factors fill in (115 times the matrix's entries on the ring of 1024 and storage exhausted;
-weighted, 1.8 times: it pivots last).
+weighted by 2⁻⁵⁰ (residual and Newton row alike: the same Newton corrections). SuperLU with
+partial pivoting (SciPy's, threshold 1, and SUNDIALS' SuperLU_MT alike) pivots by magnitude:
+unweighted, that row is chosen as a pivot early and the factors fill in (115 times the matrix's
+entries on the ring of 1024; SuperLU_MT's storage ran out); weighted, 1.8 times: it pivots last.
 
 The algebraic diagonal gets the dense path's regularization (:mod:`pfaff.integrate.ida`) divided
 by size²: ε_i = 1e-8 · s_i / (c_j size²), s_i the largest A_i D⁻¹A_iᵀ (D = diag M) or A_i A_iᵀ
@@ -39,6 +39,7 @@ import numpy as np
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
+from pfaff.core.errors import ConstraintError
 from pfaff.numeric.streams import Index, indices, scatter_add, take
 
 if TYPE_CHECKING:
@@ -187,7 +188,14 @@ class GGLNewton:
     def factor(self, t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float) -> None:
         """Assemble J and factor it (SuperLU, COLAMD, partial pivoting): IDA's preconditioner
         setup. The factors are exact, so its GMRES converges at once until c_j drifts."""
-        self._lu = spla.splu(self.matrix(t, y, yp, cj), permc_spec="COLAMD", diag_pivot_thresh=1.0)
+        try:
+            self._lu = spla.splu(
+                self.matrix(t, y, yp, cj), permc_spec="COLAMD", diag_pivot_thresh=1.0
+            )
+        except (RuntimeError, MemoryError) as e:  # exactly singular, or the factors too large
+            raise ConstraintError(
+                f"IDA's Newton matrix could not be factored at t = {t:.17g}: {e}"
+            ) from None
         self.factorizations += 1
 
     def precondition(
