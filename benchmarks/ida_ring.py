@@ -11,6 +11,20 @@ An IDA run is capped at ``--cap`` seconds (``max_seconds``; "cap" in the table).
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
+Measured 2026-11-27 on the 2-core machine shared with other runs (load average 7 to 11), CPU
+seconds, one repeat::
+
+          N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
+       1024     0.031     0.241       7.9        43       35   1.1e-15   2.7e-09
+       4096     0.101     0.849       8.4        43       35   6.7e-16   2.7e-09
+      16384     0.113     3.215      28.4        43       35   1.1e-15   2.7e-09
+      65536     0.367    15.178      41.4        43       35   1.1e-15   2.7e-09
+
+IDA's 35 factorizations of about 0.3 s each (SuperLU, 2.2 times the matrix's 1.2 million
+entries at 2^16) are most of its time: the target is not met (41x). Before, IDA on a family was
+dense: 214 s at N = 1024, and refused from about 2000 members on. N = 2^22 and 2^24 are refused
+(about 22 and 88 GiB estimated against 17.5 GiB available).
+
 Run from the project root::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/ida_ring.py            # N = 2^10, 2^12, 2^14, 2^16
