@@ -220,16 +220,33 @@ class GGLNewton:
         return sps.csc_matrix((data, p.indices, p.indptr), shape=p.shape)
 
     def _terms(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> tuple[list, list]:
-        """Every term of J: where it goes (:data:`Term`) and its values (per instance)."""
-        model, n, m = self.model, self.n, self.m
+        """Every term of J: where it goes (row offset, row index set, column offset, column
+        index set, instances, selection or None) and its values (per instance or one)."""
+        n, m = self.n, self.m
         q, v, lam, mu = self._split(y)
-        vp = yp[n : 2 * n]
-        V, L, U = n, 2 * n, 2 * n + m
         whole = Index(0, 1, n)
-        terms: list = [(0, whole, 0, whole, n, None), (0, whole, V, whole, n, None)]
+        terms: list = [(0, whole, 0, whole, n, None), (0, whole, n, whole, n, None)]
         values: list = [cj, -1.0]
-        diag = np.zeros(n)
-        for part, ondiag in zip(model.dyn, self._diag, strict=True):
+        diag = self._dynamics_terms(t, q, v, yp[n : 2 * n], cj, terms, values)
+        squares = self._constraint_terms(t, q, v, lam, mu, diag, terms, values)
+        eps = self.regularization / cj
+        L, U = 2 * n, 2 * n + m
+        terms.append((L, Index(0, 1, m), L, Index(0, 1, m), m, None))
+        values.append(eps * self._ref)
+        if self.mh:
+            self._ref_h = np.maximum(self._ref_h, squares[self.hrows])
+            terms.append((U, Index(0, 1, self.mh), U, Index(0, 1, self.mh), self.mh, None))
+            values.append(eps * self._ref_h)
+        return terms, values
+
+    def _dynamics_terms(
+        self, t: float, q: np.ndarray, v: np.ndarray, vp: np.ndarray, cj: float,
+        terms: list, values: list,
+    ) -> np.ndarray:  # fmt: skip
+        """The F₂ rows: c_j M, ∂(M v')/∂q and −∂(Q − h)/∂(q, v); returns diag M (1 where 0)."""
+        V = self.n
+        diag = np.zeros(self.n)
+        for part, ondiag in zip(self.model.dyn, self._diag, strict=True):
             kern, cols = part.kernel, part.kernel.columns
             k = kern.count
             outs, dq, dv = _partials(kern, t, q, v, wrt_velocities=True)
@@ -240,23 +257,30 @@ class GGLNewton:
                 values.append(cj * outs[e])
                 if on:
                     scatter_add(diag, r, outs[e])
-                if e in dq:
-                    vc = take(c, vp)
-                    for j, col in enumerate(cols):
-                        terms.append((V, r, 0, col, k, None))
-                        values.append(dq[e][j] * vc)
+                for j, col in enumerate(cols if e in dq else ()):
+                    terms.append((V, r, 0, col, k, None))
+                    values.append(dq[e][j] * take(c, vp))
             for i, ix in enumerate(part.forcing):
                 for d, off in ((dq, 0), (dv, V)):
                     for j, col in enumerate(cols if nu + i in d else ()):
                         terms.append((V, ix, off, col, k, None))
                         values.append(-d[nu + i][j])
         diag[~(diag > 0)] = 1.0
+        return diag
+
+    def _constraint_terms(
+        self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, mu: np.ndarray,
+        diag: np.ndarray, terms: list, values: list,
+    ) -> np.ndarray:  # fmt: skip
+        """−Aᵀ, −A_hᵀ, A and their curvature (by λ, μ, v) and ∂b/∂q; updates the rows' sizes
+        s_i and returns Σ_k A_ik² per row."""
+        n, m = self.n, self.m
+        V, L, U = n, 2 * n, 2 * n + m
         ref, squares = np.zeros(m), np.zeros(m)
-        for part, holo in zip(model.con, self._holo, strict=True):
+        for part, holo in zip(self.model.con, self._holo, strict=True):
             kern, cols, rows = part.res, part.res.columns, part.rows
             k = kern.count
             outs, dq, _ = _partials(kern, t, q, v, wrt_velocities=False)
-            na = len(part.cols)
             lr, mr = take(rows, lam), take(rows, mu)
             for a, c in enumerate(part.cols):
                 terms += [(V, c, L, rows, k, None), (L, rows, V, c, k, None)]
@@ -274,18 +298,12 @@ class GGLNewton:
                     if holo is not None:
                         terms.append((0, c, 0, col, k, holo[0]))
                         values.append(-dq[a][j] * mr)
+            na = len(part.cols)
             for j, col in enumerate(cols if na in dq else ()):  # ∂b/∂q
                 terms.append((L, rows, 0, col, k, None))
                 values.append(dq[na][j])
         self._ref = np.maximum(self._ref, ref)
-        eps = self.regularization / cj
-        terms.append((L, Index(0, 1, m), L, Index(0, 1, m), m, None))
-        values.append(eps * self._ref)
-        if self.mh:
-            self._ref_h = np.maximum(self._ref_h, squares[self.hrows])
-            terms.append((U, Index(0, 1, self.mh), U, Index(0, 1, self.mh), self.mh, None))
-            values.append(eps * self._ref_h)
-        return terms, values
+        return squares
 
 
 def _partials(kernel, t: float, q: np.ndarray, v: np.ndarray, wrt_velocities: bool) -> tuple:
