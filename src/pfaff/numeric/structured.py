@@ -60,8 +60,6 @@ class StructuredModel(StreamModel):
     ('triangular', 2.0, -1.0)
     """
 
-    sparse_dae = True  # IDA's Newton matrix in CSC (pfaff.numeric.ggl)
-
     def __init__(
         self,
         n: int,
@@ -161,6 +159,14 @@ class StructuredModel(StreamModel):
             attitudes=self.attitudes, geometry=self.geometry, linearizer=self.linearizer,
             restream=self._restream, timings=self.timings,
         )  # fmt: skip
+
+    @property
+    def sparse_dae(self) -> bool:  # type: ignore[override]
+        """IDA's Newton matrix in CSC (:mod:`pfaff.numeric.ggl`), unless a row depends on the
+        others (the closed ring): its regularization, scaled for long chains, is then too small
+        to fix λ along the null space of Aᵀ (the ring of 64 went astray), and IDA takes the
+        dense path, whose 1e-8 does."""
+        return self.__dict__.get("_drop") is None
 
     def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
         """True when A has the triangular structure with non-zero pivots at (t, q), which proves
