@@ -18,6 +18,7 @@ import scipy.sparse as sps
 from pfaff.core.errors import ConstraintError, ModelTypeError, StateError
 from pfaff.core.lazy import NumberedNames
 from pfaff.numeric.checks import check_finite, check_state
+from pfaff.numeric.ggl import GGLNewton
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
 from pfaff.numeric.parts import ConStreams, DynStreams
 from pfaff.numeric.pattern import KKTPattern, coo
@@ -96,6 +97,7 @@ class StreamModel(Quantities, ModelValue):
     contacts: object = None  # (likewise, before contacts)
     evaluator = "template"  # (general models choose theirs: pfaff.numeric.evaluator)
     mass_singular = False  # (a general model's run finds it at its first state)
+    sparse_dae = False  # IDA's Newton matrix: dense (families: the sparse one of dae_newton)
 
     def compile_machine_code(self) -> bool:
         """False: this model evaluates with its template kernels (no machine code)."""
@@ -344,6 +346,11 @@ class StreamModel(Quantities, ModelValue):
         avals, b, _, f = self._constraints(t, q, qd)
         A = self._jacobian(avals)
         return self._mass(mvals), A, forcing, f, b + A @ qd
+
+    def dae_newton(self, hrows: np.ndarray, t: float, y: np.ndarray, yp: np.ndarray) -> GGLNewton:
+        """The stabilized index-2 residual over the streams and its sparse Newton matrix
+        (:class:`pfaff.numeric.ggl.GGLNewton`), its pattern made at the state (t, y, y')."""
+        return GGLNewton(self, hrows, t, y, yp)
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray

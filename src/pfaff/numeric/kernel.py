@@ -219,3 +219,27 @@ class StreamKernel:
         for j, i in zip(self._slot, self.varying, strict=True):
             res[i] = out[j] if j >= 0 else math.fsum(self._partial[-1 - j])
         return res
+
+    def local(self, t_: float, args: list) -> list:
+        """Every output per instance from the local arguments ``args`` = [q_0.., q_{k-1},
+        qd_0.., qd_{k-1}] (arrays over all instances, or scalars shared by all): constants as
+        floats, the others as the generated function returns them, never summed and in one
+        call (no chunks, no buffers). What a Jacobian by local differences perturbs
+        (:mod:`pfaff.numeric.ggl`).
+        """
+        res: list = list(self.const)
+        if self._fn is None:
+            return res
+        trig: list = []
+        if self.angles:
+            for a in self._angle_fn(*args, t_):
+                trig += [np.sin(a), np.cos(a)]
+        try:
+            values = self._fn(*args, t_, *trig, *self._params)
+        except (ValueError, ArithmeticError) as e:
+            if not raised_in_generated_code(e):
+                raise
+            raise undefined_at(e, t_) from None
+        for i, r in zip(self.varying, values, strict=True):
+            res[i] = r
+        return res

@@ -115,6 +115,9 @@ class DynamicsModel(Protocol):
         Which code evaluates a state (:mod:`pfaff.numeric.evaluator`).
     mass_singular : bool
         M found singular at a run's first state (the run solves the whole KKT matrix).
+    sparse_dae : bool
+        Whether IDA takes its Newton matrix in CSC from ``dae_newton`` (families) instead of
+        assembling a dense one from ``dae_blocks``.
     """
 
     n: int
@@ -131,6 +134,7 @@ class DynamicsModel(Protocol):
     geometry: object
     evaluator: str
     mass_singular: bool
+    sparse_dae: bool
 
     @property
     def applied_power(self) -> bool: ...
@@ -191,6 +195,12 @@ class DynamicsModel(Protocol):
 
     def dae_blocks(self, t: float, q: Vector, qd: Vector) -> tuple:
         """(M, A, Q − h, f, g) for a DAE residual: M (n, n) and A (m, n) dense or sparse."""
+        ...
+
+    def dae_newton(self, hrows: Vector, t: float, y: Vector, yp: Vector) -> object:
+        """The stabilized index-2 DAE over y = [q, v, λ, μ] (μ per row of ``hrows``): an object
+        with ``size``, ``pattern`` (CSC), ``residual(t, y, y', res)`` and
+        ``jacobian(t, y, y', res, c_j, data)`` (:class:`pfaff.numeric.ggl.GGLNewton`)."""
         ...
 
     def power_function(self) -> Power:

@@ -160,6 +160,14 @@ class StructuredModel(StreamModel):
             restream=self._restream, timings=self.timings,
         )  # fmt: skip
 
+    @property
+    def sparse_dae(self) -> bool:  # type: ignore[override]
+        """IDA's Newton matrix in CSC (:mod:`pfaff.numeric.ggl`), unless a row depends on the
+        others (the closed ring): its regularization, scaled for long chains, is then too small
+        to fix λ along the null space of Aᵀ (the ring of 64 went astray), and IDA takes the
+        dense path, whose 1e-8 does."""
+        return self.__dict__.get("_drop") is None
+
     def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
         """True when A has the triangular structure with non-zero pivots at (t, q), which proves
         rank m; False when it has no such structure (the rank must be found otherwise).

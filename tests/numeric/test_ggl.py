@@ -1,0 +1,72 @@
+"""The GGL residual and sparse Newton matrix of a family model (pfaff.numeric.ggl), against
+central differences of the residual and the closed forms of the pushed ring."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pfaff
+from pfaff.numeric.ggl import DENSE_ROW_WEIGHT, GGLNewton
+
+N = 16  # (from 16 members on, the x row counts as dense: max(16, 4 √size) entries)
+
+
+@pytest.fixture(scope="module")
+def ring():
+    model = pfaff.models.rolling_ring(N, force=True, family=True).equations()
+    return model.compile({"M": 1.3, "r": 0.5, "F": 2.0}).for_run()
+
+
+def _consistent(model, theta: float, theta_dot: float) -> tuple[np.ndarray, np.ndarray]:
+    q, qd = pfaff.models.ring_state(N, radius=0.5, theta=theta, theta_dot=theta_dot)
+    qdd, lam = model.solve(0.0, q, qd)
+    y = np.concatenate([q, qd, lam, np.zeros(N)])
+    return y, np.concatenate([qd, qdd, np.zeros(2 * N)])
+
+
+def test_newton_matrix_matches_differences_of_the_residual(ring) -> None:
+    rng = np.random.default_rng(7)
+    y, yp = _consistent(ring, 0.4, 1.5)
+    y += 0.1 * rng.standard_normal(y.size)  # off the manifold, μ ≠ 0: every term is exercised
+    yp += 0.1 * rng.standard_normal(y.size)
+    g = GGLNewton(ring, np.arange(N), 0.0, y, yp)
+    cj = 37.0
+    J = g.matrix(0.0, y, yp, cj).toarray()
+    fd = np.empty_like(J)
+    plus, minus = np.empty(g.size), np.empty(g.size)
+    for j in range(g.size):  # F(y + h e_j, y' + cj h e_j): the column ∂F/∂y_j + cj ∂F/∂y'_j
+        h = 1e-6 * max(1.0, abs(y[j]))
+        e = np.zeros(g.size)
+        e[j] = h
+        g.residual(0.0, y + e, yp + cj * e, plus)
+        g.residual(0.0, y - e, yp - cj * e, minus)
+        fd[:, j] = (plus - minus) / (2 * h)
+    alg = np.arange(2 * g.n, g.size)
+    fd[alg, alg] = J[alg, alg]  # the regularization of the algebraic diagonal is not in F
+    assert np.abs(J[alg, alg]).max() < 1e-7 * np.abs(J).max()
+    np.testing.assert_allclose(J, fd, rtol=0, atol=1e-6 * np.abs(J).max())
+    # the x row of the ring (every angle's column) is the one weighted row
+    assert g.dense_rows.tolist() == [g.n]
+    assert np.count_nonzero(J[g.n]) > 2 * N
+    assert np.abs(J[g.n]).max() < 2 * DENSE_ROW_WEIGHT * np.abs(J).max()
+
+
+def test_residual_vanishes_on_the_ring_motion(ring) -> None:
+    """At a state on the manifold with q̈, λ from the KKT solve, F = 0; the x row's forcing
+    −h_x = (M r/N) Σ sin θ_k θ̇² moves with θ̇, and the Newton row for x holds c_j M and, by
+    each θ̇_k, the hand derivative below."""
+    y, yp = _consistent(ring, 0.9, 2.0)
+    g = GGLNewton(ring, np.arange(N), 0.0, y, yp)
+    res = np.empty(g.size)
+    g.residual(0.0, y, yp, res)
+    assert np.abs(res).max() < 1e-12
+    # the ring's closed forms: θ̈ = F/(2Mr), λ_1 = −F/2 whatever θ̇
+    assert yp[g.n + 1] == pytest.approx(2.0 / (2 * 1.3 * 0.5), rel=1e-12)
+    assert y[2 * g.n] == pytest.approx(-1.0, rel=1e-12)
+    J = g.matrix(0.0, y, yp, 5.0).toarray() / DENSE_ROW_WEIGHT
+    theta = y[1 : N + 1]
+    # by θ̇_k: c_j M_xθ_k − ∂(−h_x)/∂θ̇_k = (M r/N)(c_j cos θ_k − 2 θ̇ sin θ_k), θ̇ = 2
+    expected = 1.3 * 0.5 / N * (5.0 * np.cos(theta) - 2 * 2.0 * np.sin(theta))
+    np.testing.assert_allclose(J[g.n, g.n + 1 : 2 * g.n], expected, rtol=1e-6, atol=1e-9)
+    assert J[g.n, g.n] == pytest.approx(5.0 * 1.3)
