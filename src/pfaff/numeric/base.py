@@ -330,8 +330,12 @@ class StreamModel(Quantities, ModelValue):
             for val in vals:
                 scatter_add(sq, part.rows, np.multiply(val, val))
 
+        view, solved, _ = self._solved_rows(avals, [0.0] * len(avals))
+        mv = view.m  # a left-out row (the closed ring's last) is the last one: its residual
+        # follows from the others' where they hold, so the correction is the kept rows'
+
         def correct(r: np.ndarray) -> np.ndarray:
-            system = self._system(mvals, self._zeros(), avals, r)
+            system = view._system(mvals, self._zeros(), solved, r[:mv])
             return self._solver.solve(system, multipliers=False)[0]
 
         f = np.where(self.holonomic, f, 0.0)
