@@ -1,0 +1,142 @@
+"""Integrate stage: DOP853 with its stage sums in place, for the long states of family models.
+
+SciPy's ``DOP853`` forms every stage state as ``y + np.dot(K[:s].T, a) * h``: two fresh 2N-long
+arrays per stage (13 per step, more for the error estimate), each written once and freed. On the
+pushed ring at N = 2^20 those sums were 57 % of a run, mostly the page faults of the fresh arrays
+and the copies, not the arithmetic. :class:`InPlaceDOP853` is the same method (SciPy's tableau,
+error norm and step-size controller, read from ``scipy.integrate.DOP853``) whose step writes every
+stage state into one preallocated buffer (``np.dot(h a, K[:s], out=stage)``, one pass of BLAS over
+the stages, then ``stage += y``) and whose right-hand side writes q̈ straight into its row of ``K``
+(``OdeFunction.into``). A step allocates one array, its result y (the driver and the projection may
+keep it). It is a :class:`scipy.integrate.OdeSolver` like SciPy's own (it subclasses ``DOP853``):
+dense output, restarts from a projected state and the work integral are SciPy's and pfaff's
+usual ones. The results agree with SciPy's to rounding (the sums are ordered differently), with
+the same steps (``tests/integrate/test_inplace.py``); ``benchmarks/ring_scale.py --simulate``
+measures both.
+
+The work integral of a step, h Σ b_i P(t_i, y_i), needs the stage states again; once the driver
+has asked for it (``stage_power``), the step evaluates P at each stage with b_i ≠ 0 while that
+stage's state is in the buffer, instead of forming the states a second time afterwards.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.integrate import DOP853
+
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # SciPy's step-size controller constants
+INPLACE_MIN = 4096  # state sizes (2n) from which the in-place path is taken
+
+Into = Callable[[float, np.ndarray, np.ndarray], None]  # writes y'(t, y) into its third argument
+
+
+class InPlaceDOP853(DOP853):
+    """``scipy.integrate.DOP853`` with its stage sums and error estimate on preallocated buffers.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(t, y) -> ndarray`` shape (2n,): the derivative (start, dense output, restarts).
+    t0, y0, t_bound, max_step, rtol, atol, first_step
+        As for ``scipy.integrate.DOP853``.
+    into : callable
+        ``into(t, y, out)``: the same derivative written into ``out`` (shape (2n,)).
+
+    Examples
+    --------
+    >>> def into(t, y, out):
+    ...     out[0], out[1] = y[1], -y[0]
+    >>> s = InPlaceDOP853(lambda t, y: np.array([y[1], -y[0]]), 0.0, [0.0, 1.0], np.pi,
+    ...                   rtol=1e-10, atol=1e-12, into=into)
+    >>> while s.status == "running":
+    ...     _ = s.step()
+    >>> [round(float(v), 8) + 0.0 for v in s.y]
+    [0.0, -1.0]
+    """
+
+    def __init__(self, fun: Callable, t0: float, y0, t_bound: float, *, into: Into, **kw) -> None:
+        super().__init__(fun, t0, y0, t_bound, **kw)
+        self._into = into
+        n = self.n
+        self._stage = np.empty(n)  # the state of the stage being evaluated
+        self._scale = np.empty(n)  # atol + rtol max(|y|, |y_new|), then scratch
+        self._e5, self._e3 = np.empty(n), np.empty(n)
+        self.stage_power: Callable | None = None  # P(t, q, q̇) evaluated at the stages
+        self.stage_values: list[float] | None = None  # b_i P_i of the last accepted step
+
+    def _rhs(self, t: float, y: np.ndarray, out: np.ndarray) -> None:
+        self._into(t, y, out)
+        self.nfev += 1
+
+    def _rk_step(self, t: float, y: np.ndarray, h: float, y_new: np.ndarray) -> list[float]:
+        """One attempt: K[1:] and y_new written in place (K[0] holds f(t, y) already); the
+        terms b_i P(t_i, y_i) of the work integral when ``stage_power`` is set."""
+        K, A, B, C, stage = self.K, self.A, self.B, self.C, self._stage
+        power, n, terms = self.stage_power, self.n // 2, []
+        if power is not None and B[0] != 0.0:
+            terms.append(B[0] * power(t, y[:n], y[n:]))
+        for s in range(1, self.n_stages):
+            np.dot(h * A[s, :s], K[:s], out=stage)
+            stage += y
+            ts = t + C[s] * h
+            if power is not None and B[s] != 0.0:
+                terms.append(B[s] * power(ts, stage[:n], stage[n:]))
+            self._rhs(ts, stage, K[s])
+        np.dot(h * B, K[:-1], out=y_new)
+        y_new += y
+        self._rhs(t + h, y_new, K[-1])
+        return terms
+
+    def _error_norm(self, y: np.ndarray, y_new: np.ndarray, h: float) -> float:
+        """SciPy's DOP853 error norm, its arrays in the buffers."""
+        sc, e5, e3 = self._scale, self._e5, self._e3
+        np.abs(y, out=sc)
+        np.abs(y_new, out=e5)
+        np.maximum(sc, e5, out=sc)
+        sc *= self.rtol
+        sc += self.atol
+        np.dot(self.E5, self.K, out=e5)
+        e5 /= sc
+        np.dot(self.E3, self.K, out=e3)
+        e3 /= sc
+        n5, n3 = float(np.dot(e5, e5)), float(np.dot(e3, e3))
+        if n5 == 0 and n3 == 0:
+            return 0.0
+        return abs(h) * n5 / np.sqrt((n5 + 0.01 * n3) * len(sc))
+
+    def _step_impl(self) -> tuple[bool, str | None]:
+        """SciPy's ``RungeKutta._step_impl`` (the same controller), stages in place."""
+        t, y = self.t, self.y
+        min_step = 10 * np.abs(np.nextafter(t, self.direction * np.inf) - t)
+        h_abs = min(max(self.h_abs, min_step), self.max_step)
+        self.K[0] = self.f  # (the stages write K[1:] only: K[0] survives a rejection)
+        y_new = np.empty(self.n)
+        accepted = rejected = False
+        while not accepted:
+            if h_abs < min_step:
+                return False, self.TOO_SMALL_STEP
+            t_new = t + h_abs * self.direction
+            if self.direction * (t_new - self.t_bound) > 0:
+                t_new = self.t_bound
+            h = t_new - t
+            h_abs = abs(h)
+            terms = self._rk_step(t, y, h, y_new)
+            error = self._error_norm(y, y_new, h)
+            if error < 1:
+                factor = (
+                    MAX_FACTOR
+                    if error == 0
+                    else min(MAX_FACTOR, SAFETY * error**self.error_exponent)
+                )
+                h_abs *= min(1, factor) if rejected else factor
+                accepted = True
+            else:
+                h_abs *= max(MIN_FACTOR, SAFETY * error**self.error_exponent)
+                rejected = True
+        self.h_previous, self.y_old = h, y
+        self.t, self.y, self.h_abs = t_new, y_new, h_abs
+        self.f = self.K[-1]  # (a view: the next step copies it into K[0] before any stage)
+        self.stage_values = terms if self.stage_power is not None else None
+        return True, None
