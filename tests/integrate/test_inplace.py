@@ -57,8 +57,13 @@ def test_one_step_as_scipy(h, tol):
     np.testing.assert_allclose(b.t, a.t, rtol=tol)
     np.testing.assert_allclose(b.y, a.y, rtol=tol, atol=1e-15)
     np.testing.assert_allclose(b.h_abs, a.h_abs, rtol=1e-9)
-    tm = (a.t_old + a.t) / 2
+    tm = np.array([a.t_old, (a.t_old + a.t) / 2, a.t])
     np.testing.assert_allclose(b.dense_output()(tm), a.dense_output()(tm), rtol=tol)
+    np.testing.assert_allclose(b.dense_output()(tm[1]), a.dense_output()(tm[1]), rtol=tol)
+    dense = b.dense_output()
+    b.step()
+    with pytest.raises(RuntimeError, match="earlier step"):
+        dense(tm[1])
 
 
 @pytest.fixture(scope="module")

@@ -24,10 +24,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.integrate import DOP853
+from scipy.integrate import DOP853, DenseOutput
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # SciPy's step-size controller constants
 INPLACE_MIN = 4096  # state sizes (2n) from which the in-place path is taken
+BLOCK = 1 << 15  # components per block of the error norm (three 256 KiB buffers)
+INTERPOLATOR_POWER = 3 + DOP853.D.shape[0]  # the degree of DOP853's interpolant
 
 Into = Callable[[float, np.ndarray, np.ndarray], None]  # writes y'(t, y) into its third argument
 
@@ -61,8 +63,8 @@ class InPlaceDOP853(DOP853):
         self._into = into
         n = self.n
         self._stage = np.empty(n)  # the state of the stage being evaluated
-        self._scale = np.empty(n)  # atol + rtol max(|y|, |y_new|), then scratch
-        self._e5, self._e3 = np.empty(n), np.empty(n)
+        self._scale, self._err = np.empty(BLOCK), np.empty(BLOCK)  # (the error norm's)
+        self.steps = 0  # accepted steps: an interpolant is valid until the next one
         self.stage_power: Callable | None = None  # P(t, q, q̇) evaluated at the stages
         self.stage_values: list[float] | None = None  # b_i P_i of the last accepted step
 
@@ -90,21 +92,39 @@ class InPlaceDOP853(DOP853):
         return terms
 
     def _error_norm(self, y: np.ndarray, y_new: np.ndarray, h: float) -> float:
-        """SciPy's DOP853 error norm, its arrays in the buffers."""
-        sc, e5, e3 = self._scale, self._e5, self._e3
-        np.abs(y, out=sc)
-        np.abs(y_new, out=e5)
-        np.maximum(sc, e5, out=sc)
-        sc *= self.rtol
-        sc += self.atol
-        np.dot(self.E5, self.K, out=e5)
-        e5 /= sc
-        np.dot(self.E3, self.K, out=e3)
-        e3 /= sc
-        n5, n3 = float(np.dot(e5, e5)), float(np.dot(e3, e3))
+        """SciPy's DOP853 error norm, over blocks of :data:`BLOCK` components (the scale and
+        the two estimates of a block in cache-sized buffers: no array of the state's length)."""
+        K, sc, e = self.K, self._scale, self._err
+        atol, rtol, n5, n3 = self.atol, self.rtol, 0.0, 0.0
+        for i in range(0, self.n, BLOCK):
+            j = min(i + BLOCK, self.n)
+            s_, e_ = sc[: j - i], e[: j - i]
+            np.abs(y[i:j], out=s_)
+            np.abs(y_new[i:j], out=e_)
+            np.maximum(s_, e_, out=s_)
+            s_ *= rtol
+            s_ += atol[i:j] if np.ndim(atol) else atol
+            np.dot(self.E5, K[:, i:j], out=e_)
+            e_ /= s_
+            n5 += float(np.dot(e_, e_))
+            np.dot(self.E3, K[:, i:j], out=e_)
+            e_ /= s_
+            n3 += float(np.dot(e_, e_))
         if n5 == 0 and n3 == 0:
             return 0.0
-        return abs(h) * n5 / np.sqrt((n5 + 0.01 * n3) * len(sc))
+        return abs(h) * n5 / np.sqrt((n5 + 0.01 * n3) * self.n)
+
+    def _dense_output_impl(self) -> DenseOutput:
+        """SciPy's DOP853 interpolant of the last step, its three extra stages in place, as
+        one weighted sum of the stages per requested time (:class:`_Dense`): SciPy's forms
+        seven state-long coefficient arrays first (1.8 GB at 2^24 particles)."""
+        K, h, stage = self.K_extended, self.h_previous, self._stage
+        for s, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA, strict=True),
+                                   start=self.n_stages + 1):  # fmt: skip
+            np.dot(h * a[:s], K[:s], out=stage)
+            stage += self.y_old
+            self._rhs(self.t_old + c * h, stage, K[s])
+        return _Dense(self, h)
 
     def _step_impl(self) -> tuple[bool, str | None]:
         """SciPy's ``RungeKutta._step_impl`` (the same controller), stages in place."""
@@ -139,4 +159,47 @@ class InPlaceDOP853(DOP853):
         self.t, self.y, self.h_abs = t_new, y_new, h_abs
         self.f = self.K[-1]  # (a view: the next step copies it into K[0] before any stage)
         self.stage_values = terms if self.stage_power is not None else None
+        self.steps += 1
         return True, None
+
+
+class _Dense(DenseOutput):
+    """The DOP853 interpolant of :class:`InPlaceDOP853`'s last step, valid until its next.
+
+    SciPy's is y = y₀ + Σ_j c_j(x) F_j, x = (t − t₀)/h, with F = [Δ, h f₀ − Δ, 2Δ − h (f + f₀),
+    h D K] (Δ = y − y₀, f₀ = K₀). Gathered per time: y = (1 − a) y₀ + a y − c₂ h f + w K, with
+    a = c₀ − c₁ + 2c₂ and w = h (c₃…c₆) D + h (c₁ − c₂) e₀: one product with the 16 stages.
+    """
+
+    def __init__(self, solver: InPlaceDOP853, h: float) -> None:
+        super().__init__(solver.t_old, solver.t)
+        self.solver, self.h, self.step = solver, h, solver.steps
+        self.y_old, self.y, self.f = solver.y_old, solver.y, solver.f
+
+    def _weights(self, x: float) -> np.ndarray:
+        """c_j(x) by SciPy's Horner-like recursion (``Dop853DenseOutput``) on the weights."""
+        c = np.zeros(INTERPOLATOR_POWER)
+        for i in range(INTERPOLATOR_POWER):
+            c[INTERPOLATOR_POWER - 1 - i] += 1.0
+            c *= x if i % 2 == 0 else 1.0 - x
+        return c
+
+    def _call_impl(self, t: np.ndarray) -> np.ndarray:
+        s = self.solver
+        if s.steps != self.step:
+            raise RuntimeError("the dense output of an earlier step (the stages have changed)")
+        ts = np.atleast_1d(t)
+        out = np.empty((len(ts), len(self.y_old)))
+        for k, tk in enumerate(ts):
+            c, h = self._weights((float(tk) - self.t_old) / self.h), self.h
+            a = c[0] - c[1] + 2.0 * c[2]
+            w = h * (c[3:] @ s.D)
+            w[0] += h * (c[1] - c[2])
+            np.dot(w, s.K_extended, out=out[k])
+            np.multiply(self.y_old, 1.0 - a, out=s._stage)
+            out[k] += s._stage
+            np.multiply(self.y, a, out=s._stage)
+            out[k] += s._stage
+            np.multiply(self.f, -c[2] * h, out=s._stage)
+            out[k] += s._stage
+        return out[0] if np.ndim(t) == 0 else out.T
