@@ -65,6 +65,8 @@ class InPlaceDOP853(DOP853):
         self._stage = np.empty(n)  # the state of the stage being evaluated
         self._scale, self._err = np.empty(BLOCK), np.empty(BLOCK)  # (the error norm's)
         self.steps = 0  # accepted steps: an interpolant is valid until the next one
+        self._extra: np.ndarray | None = None  # the dense output's three extra stages
+        self.K_extended = None  # (SciPy's 16 rows: the 13 of K are a view of it, untouched)
         self.stage_power: Callable | None = None  # P(t, q, q̇) evaluated at the stages
         self.stage_values: list[float] | None = None  # b_i P_i of the last accepted step
 
@@ -115,15 +117,19 @@ class InPlaceDOP853(DOP853):
         return abs(h) * n5 / np.sqrt((n5 + 0.01 * n3) * self.n)
 
     def _dense_output_impl(self) -> DenseOutput:
-        """SciPy's DOP853 interpolant of the last step, its three extra stages in place, as
-        one weighted sum of the stages per requested time (:class:`_Dense`): SciPy's forms
-        seven state-long coefficient arrays first (1.8 GB at 2^24 particles)."""
-        K, h, stage = self.K_extended, self.h_previous, self._stage
-        for s, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA, strict=True),
-                                   start=self.n_stages + 1):  # fmt: skip
-            np.dot(h * a[:s], K[:s], out=stage)
+        """SciPy's DOP853 interpolant of the last step, as one weighted sum of the stages per
+        requested time (:class:`_Dense`): SciPy's forms seven state-long coefficient arrays
+        first (1.8 GB at 2^24 particles). Its three extra stages go to an array of their own,
+        dropped when the next step starts (resident only while the step has a dense output)."""
+        K, h, stage, S = self.K, self.h_previous, self._stage, self.n_stages + 1
+        extra = self._extra = np.empty((len(self.C_EXTRA), self.n))
+        for i, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA, strict=True)):
+            np.dot(h * a[:S], K, out=stage)
+            if i:  # the extra stages before this one (its own row, not yet written, as scratch)
+                np.dot(h * a[S : S + i], extra[:i], out=extra[i])
+                stage += extra[i]
             stage += self.y_old
-            self._rhs(self.t_old + c * h, stage, K[s])
+            self._rhs(self.t_old + c * h, stage, extra[i])
         return _Dense(self, h)
 
     def _step_impl(self) -> tuple[bool, str | None]:
@@ -132,6 +138,7 @@ class InPlaceDOP853(DOP853):
         min_step = 10 * np.abs(np.nextafter(t, self.direction * np.inf) - t)
         h_abs = min(max(self.h_abs, min_step), self.max_step)
         self.K[0] = self.f  # (the stages write K[1:] only: K[0] survives a rejection)
+        self._extra = None  # (the last step's extra stages: freed)
         y_new = np.empty(self.n)
         accepted = rejected = False
         while not accepted:
@@ -195,7 +202,9 @@ class _Dense(DenseOutput):
             a = c[0] - c[1] + 2.0 * c[2]
             w = h * (c[3:] @ s.D)
             w[0] += h * (c[1] - c[2])
-            np.dot(w, s.K_extended, out=out[k])
+            np.dot(w[: len(s.K)], s.K, out=out[k])
+            np.dot(w[len(s.K) :], s._extra, out=s._stage)
+            out[k] += s._stage
             np.multiply(self.y_old, 1.0 - a, out=s._stage)
             out[k] += s._stage
             np.multiply(self.y, a, out=s._stage)
