@@ -33,12 +33,13 @@ FIELDS = ("t", "q", "qd", "qdd", "multipliers", "kinetic", "potential", "jacobi"
           "constraint_residual", "energy_balance", "redundant_rows")  # fmt: skip
 
 
-def test_file_holds_the_trajectory(ring, start, tmp_path):
+@pytest.mark.parametrize("t_eval", [T_EVAL, None])  # given times; every step
+def test_file_holds_the_trajectory(ring, start, tmp_path, t_eval):
     """The streamed run's arrays (memory maps of the file) equal the in-memory run's; SciPy's
     reader finds the same values, time as the record dimension, and the status."""
     path = tmp_path / "run.nc"
-    a = pfaff.simulate(ring, *start, (0.0, 0.5), t_eval=T_EVAL)
-    b = pfaff.simulate(ring, *start, (0.0, 0.5), t_eval=T_EVAL, output=path)
+    a = pfaff.simulate(ring, *start, (0.0, 0.5), t_eval=t_eval)
+    b = pfaff.simulate(ring, *start, (0.0, 0.5), t_eval=t_eval, output=path)
     assert b.output == path and b.status == a.status == "success"
     for key in FIELDS:
         np.testing.assert_array_equal(getattr(b, key), getattr(a, key), err_msg=key)

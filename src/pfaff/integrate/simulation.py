@@ -461,7 +461,7 @@ def _simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = not cls.reports_drift
-    memory = state_bytes(model.n, model.m) if te is None else None
+    memory = state_bytes(model.n, model.m) if te is None and kind != "nc" else None
     pace = Pace(t1, max_steps, memory, opts["max_seconds"])
     if contacts:
         run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
