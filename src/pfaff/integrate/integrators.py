@@ -130,6 +130,7 @@ class _RKStepper(Stepper):
             if s.stage_power is power and s.stage_values is not None:
                 return h * checked_sum(s.stage_values, t0 + h)
             s.stage_power = power  # the next steps evaluate it at their stages
+            return h * checked_sum(s.stage_terms(power), t0 + h)
         n, terms = len(y0) // 2, []
         for i, b in enumerate(B):
             if b != 0.0:
