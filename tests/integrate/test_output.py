@@ -89,12 +89,12 @@ def test_a_record_cut_short_is_dropped(ring, start, tmp_path, monkeypatch):
     """Ctrl-C in the middle of writing a record: the file ends with the complete ones."""
     take, calls = StreamedStates.take, []
 
-    def half(self, *rows):
+    def half(self, *rows, **kw):
         calls.append(1)
         if len(calls) == 3:
             self.writer._fh.write(b"\1" * 100)  # part of a record, then the interrupt
             raise KeyboardInterrupt
-        take(self, *rows)
+        take(self, *rows, **kw)
 
     monkeypatch.setattr(StreamedStates, "take", half)
     path = tmp_path / "cut.nc"
@@ -135,3 +135,15 @@ def test_csv(ring, start, tmp_path, monkeypatch):
     with pytest.raises(OptionError, match=r"`output` must end in \.nc"):
         pfaff.simulate(ring, *start, (0.0, 0.5), output=tmp_path / "run.txt")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]
+
+
+def test_events_streamed(ring, start, tmp_path):
+    """A user event's state is a reported state in the file, and its record keeps its state."""
+    event = pfaff.Event(lambda t, q, qd: q[0] - 1.7, "x = 1.7")
+    a = pfaff.simulate(ring, *start, (0.0, 0.5), t_eval=T_EVAL, events=[event])
+    b = pfaff.simulate(ring, *start, (0.0, 0.5), t_eval=T_EVAL, events=[event],
+                       output=tmp_path / "run.nc")  # fmt: skip
+    assert len(b.events) == len(a.events) == 1 and len(b.t) == len(T_EVAL) + 1
+    np.testing.assert_array_equal(b.t, a.t)
+    np.testing.assert_array_equal(b.events[0].q, a.events[0].q)
+    assert b.events[0].q[0] == pytest.approx(1.7, abs=1e-12)

@@ -104,8 +104,9 @@ class StreamedStates:
         self._holonomic = np.asarray(model.holonomic, dtype=bool)
         self._e0: float | None = None
 
-    def take(self, t: list, q: list, qd: list, w: list) -> None:
-        """Evaluate and append the last recorded state, then keep only it in the run's lists."""
+    def take(self, t: list, q: list, qd: list, w: list, keep: bool = True) -> None:
+        """Evaluate and append the last recorded state, then keep only it in the run's lists
+        (its time alone unless ``keep``: a user event's record copies its state)."""
         ti, qi, qdi = t[-1], q[-1], qd[-1]
         ev = self.model.evaluate_states(np.array([ti]), qi[None], qdi[None])
         res = ev.get("residual")
@@ -125,6 +126,8 @@ class StreamedStates:
         self.writer.append(values)
         for rows in (t, q, qd, w):
             del rows[:-1]
+        if not keep:
+            q[-1] = qd[-1] = None
 
     def finish(self, status: str, message: str, stats: dict) -> Path:
         """The final attributes written, the file renamed onto the target; its path."""

@@ -579,7 +579,7 @@ class _Run:
         self.QD.append(np.array(qd))
         self.W.append(w)
         if self.sink is not None:
-            self.sink.take(self.T, self.Q, self.QD, self.W)
+            self.sink.take(self.T, self.Q, self.QD, self.W, keep=bool(self.user))
 
     def _dense_report(self, st: Stepper, points: list, work: float) -> None:
         """Record the states at ``points`` (t, event index or None) inside the last step, in
