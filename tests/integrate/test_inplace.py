@@ -92,19 +92,3 @@ def test_ring_run_as_scipy(ring, monkeypatch, first_step):
     np.testing.assert_allclose(a.qd, b.qd, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(a.nc_work, b.nc_work, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(a.nc_work, 2.0 * (a.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)
-
-
-def test_dense_output_remade_when_dropped(monkeypatch):
-    """Above EXTRA_KEEP the extra stages are dropped after each evaluation of the interpolant
-    and made again (three right-hand sides) for the next one: the same values."""
-    kw = dict(rtol=1e-8, atol=1e-10, first_step=0.05)
-    b = InPlaceDOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, into=_into, **kw)
-    b.step()
-    tm = (b.t_old + b.t) / 2
-    kept = b.dense_output()(tm)
-    monkeypatch.setattr(inplace, "EXTRA_KEEP", 0)
-    dense, nfev = b.dense_output(), b.nfev
-    first, second = dense(tm), dense(tm)
-    assert b._extra is None and b.nfev == nfev + 3
-    np.testing.assert_array_equal(first, kept)
-    np.testing.assert_array_equal(second, kept)

@@ -34,7 +34,6 @@ INTERPOLATOR_POWER = 3 + DOP853.D.shape[0]  # the degree of DOP853's interpolant
 # and 4, and neither by the solution, the error estimate or the interpolant (their coefficients
 # there are zero): K_3 takes K_1's row and K_5 K_2's. 11 rows instead of 13: 512 MB less at 2^24.
 ROW = (0, 1, 2, 1, 3, 2, 4, 5, 6, 7, 8, 9, 10)
-EXTRA_KEEP = 1 << 22  # state sizes above which the extra stages are not kept between calls
 ROWS = max(ROW) + 1
 
 
@@ -160,13 +159,7 @@ class InPlaceDOP853(DOP853):
         """SciPy's DOP853 interpolant of the last step, as one weighted sum of the stages per
         requested time (:class:`_Dense`): SciPy's forms seven state-long coefficient arrays
         first (1.8 GB at 2^24 particles). Its three extra stages go to an array of their own,
-        dropped when the next step starts, or, above :data:`EXTRA_KEEP` components, as soon
-        as the interpolant has been evaluated (made again, three right-hand sides, if it is
-        evaluated again in the same step: root finding of events)."""
-        self._extra_stages()
-        return _Dense(self, self.h_previous)
-
-    def _extra_stages(self) -> None:
+        dropped when the next step starts (resident only while the step has a dense output)."""
         K, h, stage, S = self.K, self.h_previous, self._stage, self.n_stages + 1
         extra = self._extra = np.empty((len(self.C_EXTRA), self.n))
         for i, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA, strict=True)):
@@ -176,6 +169,7 @@ class InPlaceDOP853(DOP853):
                 stage += extra[i]
             stage += self.y_old
             self._rhs(self.t_old + c * h, stage, extra[i])
+        return _Dense(self, h)
 
     def _step_impl(self) -> tuple[bool, str | None]:
         """SciPy's ``RungeKutta._step_impl`` (the same controller), stages in place."""
@@ -240,8 +234,6 @@ class _Dense(DenseOutput):
         s = self.solver
         if s.steps != self.step:
             raise RuntimeError("the dense output of an earlier step (the stages have changed)")
-        if s._extra is None:  # (dropped after the last evaluation: a long state)
-            s._extra_stages()
         ts = np.atleast_1d(t)
         out = np.empty((len(ts), len(self.y_old)))
         for k, tk in enumerate(ts):
@@ -259,6 +251,4 @@ class _Dense(DenseOutput):
             out[k] += s._stage
             np.multiply(self.f, -c[2] * h, out=s._stage)
             out[k] += s._stage
-        if s.n > EXTRA_KEEP:
-            s._extra = None
         return out[0] if np.ndim(t) == 0 else out.T
