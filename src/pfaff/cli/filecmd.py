@@ -241,7 +241,8 @@ def run_model(args: argparse.Namespace) -> int:
     if t_end is None:
         raise OptionError(f"{args.model}: no end time: give --t-end or [simulate] t_end")
     samples = settings.pop("samples", None)
-    if samples:
+    streamed = str(args.output or "").lower().endswith(".nc")  # written as the run goes
+    if samples and not streamed:
         from pfaff.core.memory import refuse_beyond
         from pfaff.integrate.pace import state_bytes
 
@@ -259,6 +260,8 @@ def run_model(args: argparse.Namespace) -> int:
         if verbose():
             settings.setdefault("progress", True)
         start = time.perf_counter()
+        if streamed and getattr(model, "contacts", None) is None:
+            settings["output"] = args.output  # (a run with contacts is written at the end)
         traj = simulate(model, mf.q0, mf.qd0, (0.0, t_end), t_eval=t_eval, **settings)
         wall = time.perf_counter() - start
     rep = _run_report(mf, traj, wall)
@@ -266,8 +269,9 @@ def run_model(args: argparse.Namespace) -> int:
     rep["redundant_sets"] = _run_redundancy(model, traj)
     stage("writing")
     if args.output:
-        suffix = args.output.rsplit(".", 1)[-1].lower()
-        (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
+        if traj.output is None:
+            suffix = args.output.rsplit(".", 1)[-1].lower()
+            (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
         rep["output"] = args.output
     if args.plot:
         traj.plot(args.plot)

@@ -287,7 +287,8 @@ def _distinct_files(args: argparse.Namespace) -> None:
 def _write_outputs(traj, args: argparse.Namespace, rep: dict, units: dict[str, str]) -> None:
     if args.output:
         suffix = Path(args.output).suffix.lstrip(".").lower()
-        (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
+        if traj.output is None:  # (not streamed by simulate as the run went)
+            (traj.to_netcdf if suffix == "nc" else traj.to_csv)(args.output)
         rep["output"] = args.output
     if args.plot:
         traj.plot(args.plot, units=units)
@@ -306,6 +307,8 @@ def run_simulation(args: argparse.Namespace) -> int:
     )
 
     opts = {"t_end": args.t_end, "method": args.method, "rtol": args.rtol, "atol": args.atol}
+    if str(args.output or "").lower().endswith(".nc"):
+        opts["output"] = args.output  # each reported state written as the run goes
     if args.demo == "ring":
         rep, traj = ring_simulation(
             args.particles,

@@ -75,6 +75,7 @@ def _run(model: DynamicsModel, q0, qd0, opts: dict) -> tuple[Trajectory, float]:
     traj = simulate(
         model, q0, qd0, (0.0, opts["t_end"]), method=opts["method"],
         rtol=opts["rtol"], atol=opts["atol"], t_eval=t_eval, progress=None,
+        output=opts.get("output"),
     )  # fmt: skip
     return traj, time.perf_counter() - t0
 

@@ -60,10 +60,15 @@ class _RKStepper(Stepper):
         self.solver: OdeSolver
         # fastrk subclasses scipy.integrate.OdeSolver: imported with SciPy's solvers, here
         from pfaff.integrate.fastrk import FLOAT_LIMIT, FloatDOP853
+        from pfaff.integrate.inplace import INPLACE_MIN, InPlaceDOP853
 
         if name == "DOP853" and on_lists is not None and len(y0) <= FLOAT_LIMIT:
             self.solver = FloatDOP853(
                 fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, list_fun=on_lists, **kw
+            )
+        elif name == "DOP853" and fun.into is not None and len(y0) >= INPLACE_MIN:
+            self.solver = InPlaceDOP853(
+                fun, t0, y0, t_end, rtol=opts.rtol, atol=opts.atol, into=fun.into, **kw
             )
         else:
             cls = rk_solver(name)
@@ -123,6 +128,11 @@ class _RKStepper(Stepper):
         s = self.solver
         t0, y0, K, A, B, C = float(s.t_old), s.y_old, s.K, s.A, s.B, s.C
         h = float(s.t) - t0
+        if hasattr(s, "stage_power"):  # evaluated during the step (pfaff.integrate.inplace)
+            if s.stage_power is power and s.stage_values is not None:
+                return h * checked_sum(s.stage_values, t0 + h)
+            s.stage_power = power  # the next steps evaluate it at their stages
+            return h * checked_sum(s.stage_terms(power), t0 + h)
         n, terms = len(y0) // 2, []
         for i, b in enumerate(B):
             if b != 0.0:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import inspect
 import math
 import numbers
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -33,6 +34,7 @@ from pfaff.integrate.events import SINGULAR, AttitudeEvents, UserEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
+from pfaff.integrate.output import output_kind, streamed
 from pfaff.integrate.pace import Pace, state_bytes
 from pfaff.integrate.scale import DEFAULT_TOL, constraint_scale
 from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
@@ -260,6 +262,7 @@ def simulate(
     rest_speed: float = 1e-6,
     max_steps: int | None = None,
     max_seconds: float | None = None,
+    output: str | os.PathLike | None = None,
 ) -> Trajectory:
     """Simulate a compiled model from (q0, q̇0) over ``t_span``.
 
@@ -329,6 +332,14 @@ def simulate(
     max_seconds : float, optional
         Fail after this many seconds of wall-clock time from the first step (default: no
         limit); the message starts "timed out at t = ...".
+    output : str or path, optional
+        A file the reported states go to. ``"run.nc"``: each state is appended to a netCDF
+        file as it is reported (time the record dimension) and dropped from memory, so that
+        the run holds one state whatever its length; the file is renamed into place when the
+        run ends, also when it ends early (the states so far, the status in its attributes),
+        and the returned trajectory reads its arrays from it (``traj.output``). ``"run.csv"``:
+        the trajectory written as CSV at the end (refused over 65536 columns).
+        :mod:`pfaff.integrate.output`.
 
     Returns
     -------
@@ -368,7 +379,7 @@ def simulate(
             model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
             integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
             project_output, progress, throw, inputs, events, rest_speed, max_steps,
-            max_seconds,
+            max_seconds, output,
         )  # fmt: skip
 
 
@@ -388,7 +399,7 @@ def _simulate(
     model, q0, qd0, t_span, t_eval, method, rtol, atol, alpha, beta, constraint_tol,
     integrator, max_step, first_step, initial_tol, project_initial, ida_jacobian,
     project_output, progress, throw, inputs, events, rest_speed=1e-6, max_steps=None,
-    max_seconds=None,
+    max_seconds=None, output=None,
 ):  # fmt: skip
     """:func:`simulate` once its arguments are known: a run copy of the model, stepped."""
     model = model.for_run() if hasattr(model, "for_run") else model  # the user's model is kept
@@ -421,6 +432,12 @@ def _simulate(
         ),
         (t0, t1),
     )
+    kind = output_kind(output, model.n, model.m)
+    if kind == "nc" and contacts:
+        raise OptionError(
+            "`output`: a run with unilateral constraints is not streamed to a file yet; "
+            "write its result with traj.to_netcdf(path)"
+        )
     if opts["constraint_tol"] is None:
         try:  # (a bad state is refused by initial_state below, naming it)
             q_start, qd_start = (np.asarray(v).ravel() for v in (q0, qd0))
@@ -444,7 +461,7 @@ def _simulate(
         raise undefined_at(e, t0) from None
     if project_output is None:
         project_output = not cls.reports_drift
-    memory = state_bytes(model.n, model.m) if te is None else None
+    memory = state_bytes(model.n, model.m) if te is None and kind != "nc" else None
     pace = Pace(t1, max_steps, memory, opts["max_seconds"])
     if contacts:
         run = ContactRun(model, contacts, inputs, opts["rest_speed"], opts["constraint_tol"])
@@ -466,11 +483,17 @@ def _simulate(
     run.events = AttitudeEvents(model.attitudes)
     run.user = user
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
+    if kind == "nc":
+        return streamed(run, model, output, cls.name, projector, project_output, (q0a, qd0a),
+                        throw)  # fmt: skip
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
         raise SimulationError(message)
     stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
-    return _trajectory(model, cls.name, run, status, message, stats, projector, project_output)
+    traj = _trajectory(model, cls.name, run, status, message, stats, projector, project_output)
+    if kind == "csv":
+        traj.to_csv(output)
+    return traj
 
 
 def _run_contacts(
@@ -518,6 +541,7 @@ class _Run:
         self._done: list[dict] = []  # the statistics of steppers replaced after a switch
         self._last_q: np.ndarray | None = None  # the state of the last event check
         self.pace = Pace(t1, None, None)  # the stall test and the step limit (set by simulate)
+        self.sink = None  # the file the states go to as they are recorded (integrate/output)
 
     def finish(self) -> dict:
         """The steppers' statistics, summed over restarts."""
@@ -554,6 +578,8 @@ class _Run:
         self.Q.append(np.array(q))
         self.QD.append(np.array(qd))
         self.W.append(w)
+        if self.sink is not None:
+            self.sink.take(self.T, self.Q, self.QD, self.W, keep=bool(self.user))
 
     def _trim(self) -> None:
         """The recorded states cut to one length (an interrupt between two appends)."""

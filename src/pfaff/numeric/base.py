@@ -436,10 +436,14 @@ class _StreamField(OdeFunction):
         self.model, self.alpha, self.beta = model, alpha, beta
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        out = np.empty(2 * self.model.n)
+        self.into(t, y, out)
+        return out
+
+    def into(self, t: float, y: np.ndarray, out: np.ndarray) -> None:
+        """y' written into ``out`` (shape (2n,)): no array of the state's length allocated."""
         n = self.model.n
-        out = np.empty(2 * n)
         out[:n] = y[n:]
         self.model._solve(t, y[:n], y[n:], self.alpha, self.beta, out[n:], multipliers=False)
         if not math.isfinite(float(np.sum(out[n:]))):  # q̈ was just written: still in cache
             raise StateError(f"the accelerations are NaN or infinite at t = {t:.17g}")
-        return out

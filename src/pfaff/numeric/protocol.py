@@ -74,9 +74,15 @@ class OdeFunction:
     on_lists : callable or None
         The same function on lists of floats, ``(t, list) -> list`` (small systems, for
         :class:`pfaff.integrate.fastrk.FloatDOP853`), or None.
+    into : callable or None
+        The same function writing into a given array, ``(t, y, out) -> None`` (long states, for
+        :class:`pfaff.integrate.inplace.InPlaceDOP853`), or None.
     """
 
     on_lists: Callable[[float, list], list] | None = None
+    # into(t, y, out): y' written into out, shape (2n,) (long states,
+    # pfaff.integrate.inplace.InPlaceDOP853); None when the field has no such form
+    into: Callable[[float, np.ndarray, np.ndarray], None] | None = None
 
     def __call__(self, t: float, y: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError

@@ -60,6 +60,9 @@ class Trajectory:
         the contacts' "impact", "rest" (closing without a bounce) and "release" (the multiplier
         crossing zero), whose q̇ is the one after the event. A zero crossing's state is also a
         reported state (in ``t``, ``q``, ...); at an impact two states share its time.
+    output : Path or None
+        The netCDF file a run wrote as it went (``simulate(output="run.nc")``): the per-state
+        arrays above are then read-only memory maps of it, read when used. None otherwise.
     redundant_rows : ndarray of int, shape (k,)
         Per reported time, how many constraint rows depend on the others (the dimension of
         the null space of Aᵀ): on those directions only Aᵀλ is determined, and ``multipliers``
@@ -100,6 +103,7 @@ class Trajectory:
         self.switches: list[tuple[float, str]] = list(fields.get("switches", []))
         self.events: list = list(fields.get("events", []))  # of pfaff.EventRecord
         self.geometry = fields.get("geometry")  # the model's, for animate (derive/geometry.py)
+        self.output: Path | None = fields.get("output")
         self.redundant_rows: np.ndarray = np.asarray(
             fields.get("redundant_rows", np.zeros(len(self.t), dtype=np.int64)), dtype=np.int64
         )

@@ -1,0 +1,254 @@
+"""Integrate stage: DOP853 with its stage sums in place, for the long states of family models.
+
+SciPy's ``DOP853`` forms every stage state as ``y + np.dot(K[:s].T, a) * h``: two fresh 2N-long
+arrays per stage (13 per step, more for the error estimate), each written once and freed. On the
+pushed ring at N = 2^20 those sums were 57 % of a run, mostly the page faults of the fresh arrays
+and the copies, not the arithmetic. :class:`InPlaceDOP853` is the same method (SciPy's tableau,
+error norm and step-size controller, read from ``scipy.integrate.DOP853``) whose step writes every
+stage state into one preallocated buffer (``np.dot(h a, K[:s], out=stage)``, one pass of BLAS over
+the stages, then ``stage += y``) and whose right-hand side writes q̈ straight into its row of ``K``
+(``OdeFunction.into``). A step allocates one array, its result y (the driver and the projection may
+keep it). It is a :class:`scipy.integrate.OdeSolver` like SciPy's own (it subclasses ``DOP853``):
+dense output, restarts from a projected state and the work integral are SciPy's and pfaff's
+usual ones. The results agree with SciPy's to rounding (the sums are ordered differently), with
+the same steps (``tests/integrate/test_inplace.py``); ``benchmarks/ring_scale.py --simulate``
+measures both.
+
+The work integral of a step, h Σ b_i P(t_i, y_i), needs the stage states again; once the driver
+has asked for it (``stage_power``), the step evaluates P at each stage with b_i ≠ 0 while that
+stage's state is in the buffer, instead of forming the states a second time afterwards.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.integrate import DOP853, DenseOutput
+
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # SciPy's step-size controller constants
+INPLACE_MIN = 4096  # state sizes (2n) from which the in-place path is taken
+BLOCK = 1 << 15  # components per block of the error norm (three 256 KiB buffers)
+INTERPOLATOR_POWER = 3 + DOP853.D.shape[0]  # the degree of DOP853's interpolant
+# The row of K each stage's derivative goes to. K_1 is read by stage 2 alone and K_2 by stages 3
+# and 4, and neither by the solution, the error estimate or the interpolant (their coefficients
+# there are zero): K_3 takes K_1's row and K_5 K_2's. 11 rows instead of 13: 512 MB less at 2^24.
+ROW = (0, 1, 2, 1, 3, 2, 4, 5, 6, 7, 8, 9, 10)
+ROWS = max(ROW) + 1
+
+
+def _rows(coefs: np.ndarray) -> np.ndarray:
+    """Coefficients over the stages 0, 1, ... as coefficients over the rows of K."""
+    out = np.zeros(ROWS)
+    for j, c in enumerate(coefs):
+        out[ROW[j]] += c
+    return out
+
+
+def _reads(s: int) -> int:
+    """How many rows of K the sum of stage s reads (the rows of the stages before it)."""
+    return 1 + max(ROW[:s])
+
+
+Into = Callable[[float, np.ndarray, np.ndarray], None]  # writes y'(t, y) into its third argument
+
+
+class InPlaceDOP853(DOP853):
+    """``scipy.integrate.DOP853`` with its stage sums and error estimate on preallocated buffers.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(t, y) -> ndarray`` shape (2n,): the derivative (start, dense output, restarts).
+    t0, y0, t_bound, max_step, rtol, atol, first_step
+        As for ``scipy.integrate.DOP853``.
+    into : callable
+        ``into(t, y, out)``: the same derivative written into ``out`` (shape (2n,)).
+
+    Examples
+    --------
+    >>> def into(t, y, out):
+    ...     out[0], out[1] = y[1], -y[0]
+    >>> s = InPlaceDOP853(lambda t, y: np.array([y[1], -y[0]]), 0.0, [0.0, 1.0], np.pi,
+    ...                   rtol=1e-10, atol=1e-12, into=into)
+    >>> while s.status == "running":
+    ...     _ = s.step()
+    >>> [round(float(v), 8) + 0.0 for v in s.y]
+    [0.0, -1.0]
+    """
+
+    def __init__(self, fun: Callable, t0: float, y0, t_bound: float, *, into: Into, **kw) -> None:
+        super().__init__(fun, t0, y0, t_bound, **kw)
+        self._into = into
+        n = self.n
+        self.K = np.zeros((ROWS, n))  # (see ROW; zeros: a row not yet written is finite)
+        self._A = np.array([_rows(self.A[s, :s]) for s in range(self.n_stages)])
+        self._B, self._E5, self._E3 = _rows(self.B), _rows(self.E5), _rows(self.E3)
+        self._stage = np.empty(n)  # the state of the stage being evaluated
+        self._scale, self._err = np.empty(BLOCK), np.empty(BLOCK)  # (the error norm's)
+        self.steps = 0  # accepted steps: an interpolant is valid until the next one
+        self._extra: np.ndarray | None = None  # the dense output's three extra stages
+        self.K_extended = None  # (SciPy's 16 rows: replaced by K and the dense output's own)
+        self.stage_power: Callable | None = None  # P(t, q, q̇) evaluated at the stages
+        self.stage_values: list[float] | None = None  # b_i P_i of the last accepted step
+
+    def _rhs(self, t: float, y: np.ndarray, out: np.ndarray) -> None:
+        self._into(t, y, out)
+        self.nfev += 1
+
+    def _rk_step(self, t: float, y: np.ndarray, h: float, y_new: np.ndarray) -> list[float]:
+        """One attempt: K[1:] and y_new written in place (K[0] holds f(t, y) already); the
+        terms b_i P(t_i, y_i) of the work integral when ``stage_power`` is set."""
+        K, B, C, stage = self.K, self.B, self.C, self._stage
+        power, n, terms = self.stage_power, self.n // 2, []
+        if power is not None and B[0] != 0.0:
+            terms.append(B[0] * power(t, y[:n], y[n:]))
+        for s in range(1, self.n_stages):
+            u = _reads(s)
+            np.dot(h * self._A[s, :u], K[:u], out=stage)
+            stage += y
+            ts = t + C[s] * h
+            if power is not None and B[s] != 0.0:
+                terms.append(B[s] * power(ts, stage[:n], stage[n:]))
+            self._rhs(ts, stage, K[ROW[s]])
+        np.dot(h * self._B, K, out=y_new)
+        y_new += y
+        self._rhs(t + h, y_new, K[ROW[-1]])
+        return terms
+
+    def stage_terms(self, power: Callable) -> list[float]:
+        """b_i P(t_i, y_i) of the last step, its stage states formed again from K (the rows
+        of the stages with b_i ≠ 0 and of those their states sum are all still there)."""
+        t0, y0, h, n = float(self.t_old), self.y_old, self.h_previous, self.n // 2
+        K, stage, terms = self.K, self._stage, []
+        for i, b in enumerate(self.B):
+            if b == 0.0:
+                continue
+            if i:
+                u = _reads(i)
+                np.dot(h * self._A[i, :u], K[:u], out=stage)
+                stage += y0
+            y = stage if i else y0
+            terms.append(b * power(float(t0 + self.C[i] * h), y[:n], y[n:]))
+        return terms
+
+    def _error_norm(self, y: np.ndarray, y_new: np.ndarray, h: float) -> float:
+        """SciPy's DOP853 error norm, over blocks of :data:`BLOCK` components (the scale and
+        the two estimates of a block in cache-sized buffers: no array of the state's length)."""
+        K, sc, e = self.K, self._scale, self._err
+        atol, rtol, n5, n3 = self.atol, self.rtol, 0.0, 0.0
+        for i in range(0, self.n, BLOCK):
+            j = min(i + BLOCK, self.n)
+            s_, e_ = sc[: j - i], e[: j - i]
+            np.abs(y[i:j], out=s_)
+            np.abs(y_new[i:j], out=e_)
+            np.maximum(s_, e_, out=s_)
+            s_ *= rtol
+            s_ += atol[i:j] if np.ndim(atol) else atol
+            np.dot(self._E5, K[:, i:j], out=e_)
+            e_ /= s_
+            n5 += float(np.dot(e_, e_))
+            np.dot(self._E3, K[:, i:j], out=e_)
+            e_ /= s_
+            n3 += float(np.dot(e_, e_))
+        if n5 == 0 and n3 == 0:
+            return 0.0
+        return abs(h) * n5 / np.sqrt((n5 + 0.01 * n3) * self.n)
+
+    def _dense_output_impl(self) -> DenseOutput:
+        """SciPy's DOP853 interpolant of the last step, as one weighted sum of the stages per
+        requested time (:class:`_Dense`): SciPy's forms seven state-long coefficient arrays
+        first (1.8 GB at 2^24 particles). Its three extra stages go to an array of their own,
+        dropped when the next step starts (resident only while the step has a dense output)."""
+        K, h, stage, S = self.K, self.h_previous, self._stage, self.n_stages + 1
+        extra = self._extra = np.empty((len(self.C_EXTRA), self.n))
+        for i, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA, strict=True)):
+            np.dot(h * _rows(a[:S]), K, out=stage)
+            if i:  # the extra stages before this one (its own row, not yet written, as scratch)
+                np.dot(h * a[S : S + i], extra[:i], out=extra[i])
+                stage += extra[i]
+            stage += self.y_old
+            self._rhs(self.t_old + c * h, stage, extra[i])
+        return _Dense(self, h)
+
+    def _step_impl(self) -> tuple[bool, str | None]:
+        """SciPy's ``RungeKutta._step_impl`` (the same controller), stages in place."""
+        t, y = self.t, self.y
+        min_step = 10 * np.abs(np.nextafter(t, self.direction * np.inf) - t)
+        h_abs = min(max(self.h_abs, min_step), self.max_step)
+        self.K[0] = self.f  # (the stages write K[1:] only: K[0] survives a rejection)
+        self._extra = None  # (the last step's extra stages: freed)
+        y_new = np.empty(self.n)
+        accepted = rejected = False
+        while not accepted:
+            if h_abs < min_step:
+                return False, self.TOO_SMALL_STEP
+            t_new = t + h_abs * self.direction
+            if self.direction * (t_new - self.t_bound) > 0:
+                t_new = self.t_bound
+            h = t_new - t
+            h_abs = abs(h)
+            terms = self._rk_step(t, y, h, y_new)
+            error = self._error_norm(y, y_new, h)
+            if error < 1:
+                factor = (
+                    MAX_FACTOR
+                    if error == 0
+                    else min(MAX_FACTOR, SAFETY * error**self.error_exponent)
+                )
+                h_abs *= min(1, factor) if rejected else factor
+                accepted = True
+            else:
+                h_abs *= max(MIN_FACTOR, SAFETY * error**self.error_exponent)
+                rejected = True
+        self.h_previous, self.y_old = h, y
+        self.t, self.y, self.h_abs = t_new, y_new, h_abs
+        self.f = self.K[-1]  # (a view: the next step copies it into K[0] before any stage)
+        self.stage_values = terms if self.stage_power is not None else None
+        self.steps += 1
+        return True, None
+
+
+class _Dense(DenseOutput):
+    """The DOP853 interpolant of :class:`InPlaceDOP853`'s last step, valid until its next.
+
+    SciPy's is y = y₀ + Σ_j c_j(x) F_j, x = (t − t₀)/h, with F = [Δ, h f₀ − Δ, 2Δ − h (f + f₀),
+    h D K] (Δ = y − y₀, f₀ = K₀). Gathered per time: y = (1 − a) y₀ + a y − c₂ h f + w K, with
+    a = c₀ − c₁ + 2c₂ and w = h (c₃…c₆) D + h (c₁ − c₂) e₀: one product with the 16 stages.
+    """
+
+    def __init__(self, solver: InPlaceDOP853, h: float) -> None:
+        super().__init__(solver.t_old, solver.t)
+        self.solver, self.h, self.step = solver, h, solver.steps
+        self.y_old, self.y, self.f = solver.y_old, solver.y, solver.f
+
+    def _weights(self, x: float) -> np.ndarray:
+        """c_j(x) by SciPy's Horner-like recursion (``Dop853DenseOutput``) on the weights."""
+        c = np.zeros(INTERPOLATOR_POWER)
+        for i in range(INTERPOLATOR_POWER):
+            c[INTERPOLATOR_POWER - 1 - i] += 1.0
+            c *= x if i % 2 == 0 else 1.0 - x
+        return c
+
+    def _call_impl(self, t: np.ndarray) -> np.ndarray:
+        s = self.solver
+        if s.steps != self.step:
+            raise RuntimeError("the dense output of an earlier step (the stages have changed)")
+        ts = np.atleast_1d(t)
+        out = np.empty((len(ts), len(self.y_old)))
+        for k, tk in enumerate(ts):
+            c, h = self._weights((float(tk) - self.t_old) / self.h), self.h
+            a = c[0] - c[1] + 2.0 * c[2]
+            w = h * (c[3:] @ s.D)
+            w[0] += h * (c[1] - c[2])
+            S = s.n_stages + 1
+            np.dot(_rows(w[:S]), s.K, out=out[k])
+            np.dot(w[S:], s._extra, out=s._stage)
+            out[k] += s._stage
+            np.multiply(self.y_old, 1.0 - a, out=s._stage)
+            out[k] += s._stage
+            np.multiply(self.y, a, out=s._stage)
+            out[k] += s._stage
+            np.multiply(self.f, -c[2] * h, out=s._stage)
+            out[k] += s._stage
+        return out[0] if np.ndim(t) == 0 else out.T

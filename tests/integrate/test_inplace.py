@@ -1,0 +1,94 @@
+"""The in-place DOP853 of long states (pfaff.integrate.inplace) against SciPy's DOP853: the same
+method, so the same steps and the same results to rounding."""
+
+import numpy as np
+import pytest
+from scipy.integrate import DOP853
+
+import pfaff
+from pfaff.integrate import inplace
+from pfaff.integrate.inplace import InPlaceDOP853
+
+
+def _van_der_pol(t, y):
+    return np.array([y[1], 5.0 * (1 - y[0] ** 2) * y[1] - y[0]])
+
+
+def _into(t, y, out):
+    out[:] = _van_der_pol(t, y)
+
+
+def _run(solver):
+    ts, ys = [], []
+    while solver.status == "running":
+        solver.step()
+        ts.append(solver.t)
+        ys.append(np.array(solver.y))
+    return np.array(ts), np.array(ys)
+
+
+def test_same_steps_as_scipy_with_rejections():
+    """Van der Pol (μ = 5) over its relaxation: rejected steps, and the same number of steps,
+    right-hand sides and final state as SciPy's DOP853. (Each step's size comes from an error
+    estimate that cancels to ~1e-11 of the stages, whose rounding differs between the two sums:
+    the grids agree to 1e-7, not to rounding; one step from the same state does, below.)"""
+    kw = dict(rtol=1e-8, atol=1e-10, first_step=0.5)  # a first step far too long: rejected
+    a = DOP853(_van_der_pol, 0.0, [2.0, 0.0], 8.0, **kw)
+    b = InPlaceDOP853(_van_der_pol, 0.0, [2.0, 0.0], 8.0, into=_into, **kw)
+    (ta, ya), (tb, yb) = _run(a), _run(b)
+    assert a.nfev > 13 * len(ta)  # some attempts were rejected
+    assert len(ta) == len(tb) and a.nfev == b.nfev
+    np.testing.assert_allclose(tb, ta, rtol=1e-7)
+    np.testing.assert_allclose(yb[-1], ya[-1], rtol=1e-7)
+
+
+# accepted at once: all to rounding; rejected first, then shorter by the rejected error estimate
+@pytest.mark.parametrize(("h", "tol"), [(0.05, 1e-14), (0.6, 1e-10)])
+def test_one_step_as_scipy(h, tol):
+    """From the same state and step size, one step of each: the same attempts, the same step,
+    new state and dense output to rounding (after a rejection, to the rounding of the error
+    estimate that shortened it), the same next step size."""
+    kw = dict(rtol=1e-8, atol=1e-10, first_step=h)
+    a = DOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, **kw)
+    b = InPlaceDOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, into=_into, **kw)
+    a.step()
+    b.step()
+    assert a.nfev == b.nfev
+    np.testing.assert_allclose(b.t, a.t, rtol=tol)
+    np.testing.assert_allclose(b.y, a.y, rtol=tol, atol=1e-15)
+    np.testing.assert_allclose(b.h_abs, a.h_abs, rtol=1e-9)
+    tm = np.array([a.t_old, (a.t_old + a.t) / 2, a.t])
+    np.testing.assert_allclose(b.dense_output()(tm), a.dense_output()(tm), rtol=tol)
+    np.testing.assert_allclose(b.dense_output()(tm[1]), a.dense_output()(tm[1]), rtol=tol)
+    dense = b.dense_output()
+    b.step()
+    with pytest.raises(RuntimeError, match="earlier step"):
+        dense(tm[1])
+
+
+@pytest.fixture(scope="module")
+def ring():
+    return (
+        pfaff.models.rolling_ring(64, force=True, family=True)
+        .equations()
+        .compile({"M": 1, "r": 0.5, "F": 2})
+    )
+
+
+@pytest.mark.parametrize("first_step", [None, 0.4])
+def test_ring_run_as_scipy(ring, monkeypatch, first_step):
+    """The pushed family ring through simulate: the in-place path and SciPy's take the same
+    steps and give the same trajectory and work integral (during the step vs afterwards) to
+    rounding; the work is F Δx, the closed form."""
+    q0, qd0 = pfaff.models.ring_state(64, 0.5, theta=np.pi, theta_dot=0.7)
+    kw = dict(t_eval=[0.0, 0.13, 0.5], max_step=0.1, first_step=first_step)
+    runs = []
+    for limit in (0, 10**12):  # in place, then SciPy's
+        monkeypatch.setattr(inplace, "INPLACE_MIN", limit)
+        runs.append(pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw))
+    a, b = runs
+    assert a.stats["steps"] == b.stats["steps"] and a.stats["nfev"] == b.stats["nfev"]
+    np.testing.assert_allclose(a.q, b.q, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(a.qd, b.qd, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(a.nc_work, b.nc_work, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(a.nc_work, 2.0 * (a.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)
