@@ -48,3 +48,19 @@ def _session_cache_home(pytestconfig: pytest.Config) -> Iterator[None]:
     home = pytestconfig.stash[_HOME]
     if os.environ.get("XDG_CACHE_HOME") != home:
         os.environ["XDG_CACHE_HOME"] = home
+
+
+# Doctests that derive a big model, run by the full suite only: (why, what covers their path fast)
+SLOW_DOCTESTS = {
+    "pfaff.models.bicycle.whipple_bicycle": (
+        "the Whipple bicycle derived and linearized: about 2 s; the rolling disk's linearization "
+        "(tests/derive/test_linearize.py) takes the same path in the fast suite"
+    ),
+}
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    for item in items:
+        if isinstance(item, pytest.DoctestItem) and item.name in SLOW_DOCTESTS:
+            item.add_marker(pytest.mark.slow)
