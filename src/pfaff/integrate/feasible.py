@@ -40,10 +40,10 @@ def refuse_dense_ida(size: int, n: int) -> None:
     Examples
     --------
     >>> refuse_dense_ida(500, 200)
-    >>> refuse_dense_ida(20_000, 6_000)  # doctest: +ELLIPSIS
+    >>> refuse_dense_ida(8_000, 2_500)  # 1.4 GiB, 1.2 h: the time (the memory on a small machine)
     Traceback (most recent call last):
     ...
-    pfaff.core.errors.OptionError: method 'ida' on 6000 coordinates factors a dense Newton matrix ...
+    pfaff.core.errors.OptionError: method 'ida' on 2500 coordinates ...
     """
     refuse_beyond(
         3 * 8.0 * size * size,  # the Newton matrix, its LU and our copy, float64
