@@ -101,30 +101,19 @@ def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum):
     same_runs(ds, ref)
 
 
-STARTED = 2.0  # seconds from a worker's plugin setup before the crash may kill it
-
-
 def test_a_run_that_kills_its_worker_is_a_failed_run(pendulum):
-    """Every worker gets a plugin that kills the process at L = 1.5: that run alone fails.
-
-    The crash waits until the worker is :data:`STARTED` seconds old: a suspect run is handed to
-    the first worker that registers, and a process that dies while its nanny still waits for its
-    start message is not always restarted (Dask's nanny; both lost, the sweep waited for a
-    worker forever: once in three runs at load 12)."""
+    """Every worker gets a plugin that kills the process at L = 1.5: that run alone fails."""
     from distributed import Client
     from distributed.diagnostics.plugin import WorkerPlugin
 
     class Crash(WorkerPlugin):
-        started = STARTED
-
         def setup(self, worker):
             from pfaff.sweep import worker as w  # (pfaff.sweep is the function)
 
-            real, ready = w._run, time.monotonic() + self.started
+            real = w._run
 
             def _run(entry, spec, i):
                 if spec.grid.point(i)["L"] == 1.5:
-                    time.sleep(max(0.0, ready - time.monotonic()))
                     os._exit(1)
                 return real(entry, spec, i)
 
