@@ -1,4 +1,4 @@
-"""The test session's settings (its own code cache folder) and shared fixtures."""
+"""Shared fixtures (the run's code cache folder is set in the top-level conftest.py)."""
 
 from __future__ import annotations
 
@@ -8,15 +8,6 @@ from pathlib import Path
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-
-
-def pytest_configure(config: object) -> None:
-    """The on-disk code cache of the run in a folder of its own: the user's stays untouched,
-    and tests after the first compile of a model take the cache's load path."""
-    import os
-    import tempfile
-
-    os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="pfaff-test-cache-")
 
 
 @pytest.fixture(scope="module")

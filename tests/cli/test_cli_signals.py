@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import csv
 import os
+import re
 import signal
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -81,15 +83,19 @@ def test_during_a_write_the_old_file_stays(
     assert [p.name for p in tmp_path.iterdir()] == ["run.csv"]  # no temporary file
 
 
-def _read_until(proc: subprocess.Popen, marker: bytes, limit: float = 600.0) -> bytes:
-    """stderr of ``proc`` up to ``marker`` (read in a thread; waits for the marker, not a time)."""
+def _read_until(
+    proc: subprocess.Popen, marker: bytes | Callable[[bytes], bool], limit: float = 600.0
+) -> bytes:
+    """stderr of ``proc`` up to ``marker`` (bytes to find, or a test of all read so far; read in
+    a thread; waits for the marker, not a time)."""
     seen = bytearray()
     found = threading.Event()
+    test = marker if callable(marker) else lambda text: marker in text
 
     def pump() -> None:
         while chunk := os.read(proc.stderr.fileno(), 4096):
             seen.extend(chunk)
-            if marker in seen:
+            if test(bytes(seen)):
                 found.set()
 
     threading.Thread(target=pump, daemon=True).start()
@@ -97,6 +103,17 @@ def _read_until(proc: subprocess.Popen, marker: bytes, limit: float = 600.0) -> 
     while not found.wait(1.0):
         assert proc.poll() is None and time.monotonic() < deadline, bytes(seen)[-2000:]
     return bytes(seen)
+
+
+def _bar_past(t: float) -> Callable[[bytes], bool]:
+    """Whether the progress bar (``simulating: ... t=186.6/1e+07``), printed from inside the
+    stepping loop, has shown a time past ``t``."""
+
+    def past(text: bytes) -> bool:
+        shown = re.findall(rb"simulating:[^\r\n]*? t=([0-9.e+-]+)/", text)
+        return bool(shown) and float(shown[-1]) > t
+
+    return past
 
 
 @pytest.mark.slow
@@ -111,7 +128,7 @@ def test_subprocess_run_interrupted_mid_simulation_writes_its_points(tmp_path, s
          "100001", "--output", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
     )  # fmt: skip
-    _read_until(proc, b"simulating:")  # the bar: printed from inside the stepping loop
+    _read_until(proc, _bar_past(200.0))  # two samples (t = 0, 100) recorded, whatever the load
     proc.send_signal(sig)
     stdout, _ = proc.communicate(timeout=600)
     assert proc.returncode == 3

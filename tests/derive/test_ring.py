@@ -14,7 +14,10 @@ from ringsyms import F, M, on_ring_manifold, r
 t = pfaff.t
 
 
-@pytest.mark.parametrize("n", [2, 3, 6])
+SIX = pytest.param(6, marks=pytest.mark.slow)  # the same path as 2 and 3, twice their cost
+
+
+@pytest.mark.parametrize("n", [2, 3, SIX])
 def test_ring_without_force_gives_2Mr2_thetadd_zero(n: int) -> None:
     """Summing the θ equations and using the constraints: 2 M r² θ̈ = 0 (the seed's result)."""
     ring = pfaff.models.rolling_ring(n)
@@ -32,7 +35,7 @@ def test_ring_without_force_gives_2Mr2_thetadd_zero(n: int) -> None:
     assert sp.simplify(sp.Add(*rhs[1:]) + r * rhs[0]) == 0
 
 
-@pytest.mark.parametrize("n", [2, 3, 6])
+@pytest.mark.parametrize("n", [2, 3, SIX])
 def test_ring_push_symbolic(n: int) -> None:
     """θ̈ = F/(2Mr), ẍ = F/(2M), λ1 = -F/2 with symbolic M, r, F (solved on the manifold)."""
     ring = pfaff.models.rolling_ring(n, force=True)

@@ -3,8 +3,10 @@
 At 100 random states each: the compiled model's ``mass_matrix(t, q)`` against ``pin.crba`` and
 ``-forcing(t, q, qd)`` (= h − Q = C q̇ + g with no damping or inputs) against
 ``pin.rnea(q, qd, 0)``, to 1e-10, for ``examples/arm6.urdf`` (a six-joint arm with shoulder and
-wrist offsets) and ``tests/data/arm7_offsets.urdf`` (seven joints, tilted joint frames, an oblique
-axis, a continuous joint, a fixed tool link, rotated inertial frames with full inertia tensors).
+wrist offsets), ``tests/data/arm7_offsets.urdf`` (seven joints, tilted joint frames, an oblique
+axis, a continuous joint, a fixed tool link, rotated inertial frames with full inertia tensors;
+slow: about 5 s to derive) and ``tests/data/arm3_offsets.urdf`` (the same kinds of joints, frames
+and inertias in three joints, and a fixed tool link with a mass: the fast suite's case).
 """
 
 from __future__ import annotations
@@ -19,7 +21,11 @@ import pfaff
 pin = pytest.importorskip("pinocchio")
 
 ROOT = Path(__file__).resolve().parents[2]
-FILES = [ROOT / "examples" / "arm6.urdf", ROOT / "tests" / "data" / "arm7_offsets.urdf"]
+FILES = [
+    ROOT / "examples" / "arm6.urdf",
+    pytest.param(ROOT / "tests" / "data" / "arm7_offsets.urdf", marks=pytest.mark.slow),
+    ROOT / "tests" / "data" / "arm3_offsets.urdf",
+]
 
 
 class PinocchioArm:

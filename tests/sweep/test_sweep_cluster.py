@@ -101,8 +101,15 @@ def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum):
     same_runs(ds, ref)
 
 
+HUNG = 600.0  # seconds (the test takes 20 s to 2 min): a guard against a hang, never a limit
+
+
 def test_a_run_that_kills_its_worker_is_a_failed_run(pendulum):
-    """Every worker gets a plugin that kills the process at L = 1.5: that run alone fails."""
+    """Every worker gets a plugin that kills the process at L = 1.5: that run alone fails.
+
+    Twice at load 12 the cluster was left with no workers (both nannies stopped restarting
+    theirs, after a good run's workers had died twice too) and the sweep waited for one forever:
+    the cluster is closed after ``HUNG`` seconds, so such a run fails instead of hanging CI."""
     from distributed import Client
     from distributed.diagnostics.plugin import WorkerPlugin
 
@@ -120,12 +127,15 @@ def test_a_run_that_kills_its_worker_is_a_failed_run(pendulum):
             w._run = _run
 
     cl = local_cluster(2, **{"distributed.scheduler.allowed-failures": 1})
+    guard = threading.Timer(HUNG, cl.close)  # the sweep's wait then raises (FutureCancelledError)
+    guard.start()
     try:
         with Client(cl) as client:
             client.register_plugin(Crash())
             vary = {"L": [0.5, 1.0, 1.5, 2.0]}  # a probe of two, then a batch of the other two
             ds = pfaff.sweep(pendulum, vary, t_end=1.0, scheduler=client, progress=False)
     finally:
+        guard.cancel()
         cl.close()
     assert ds.status.values.tolist() == ["success", "success", "failed", "success"]
     assert "worker process died" in str(ds.message.sel(L=1.5).values)

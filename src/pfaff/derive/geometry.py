@@ -264,9 +264,9 @@ class Geometry:
         Examples
         --------
         >>> import numpy as np, pfaff
-        >>> model = pfaff.models.torque_free_body("mrp").equations().compile(
+        >>> model = pfaff.models.torque_free_body("euler").equations().compile(
         ...     {"I1": 1, "I2": 2, "I3": 3})
-        >>> centres, dcm = model.geometry.bodies([0.0, 0.0, np.tan(np.pi / 8)])  # 90° about z
+        >>> centres, dcm = model.geometry.bodies([np.pi / 2, 0.0, 0.0])  # 3-2-1: 90° about z
         >>> dcm[0].round(12) + 0.0
         array([[ 0., -1.,  0.],
                [ 1.,  0.,  0.],
@@ -297,7 +297,7 @@ class Geometry:
         Examples
         --------
         >>> import pfaff
-        >>> model = pfaff.models.torque_free_body("mrp").equations().compile(
+        >>> model = pfaff.models.torque_free_body("euler").equations().compile(
         ...     {"I1": 1, "I2": 2, "I3": 3})
         >>> kind, v = model.geometry.sizes()[0]
         >>> kind, v.tolist()

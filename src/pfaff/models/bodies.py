@@ -51,7 +51,7 @@ def torque_free_body(
     Examples
     --------
     >>> import numpy as np, pfaff
-    >>> s = pfaff.models.torque_free_body("mrp")
+    >>> s = pfaff.models.torque_free_body("euler")  # 3-2-1 angles, clear of pitch ±90°
     >>> model = s.equations().compile({"I1": 1, "I2": 2, "I3": 3})
     >>> att = s.bodies[0].attitude
     >>> q0 = att.from_dcm(np.eye(3)); qd0 = att.rates(q0, [0.0, 0.0, 1.0])
