@@ -75,6 +75,10 @@ class FusedKernel:
         ``pfn(t, q…, q̇…, *params) -> [P]``, the power Qᵀq̇ of the applied forces
         (:mod:`pfaff.derive.fusedpower`), generated on its first call; ``pfn.function()``
         (before it is pickled) makes it and returns it, or None when it cannot be made.
+    loop : callable or None
+        ``loop(build=True) -> (con, power)``: the machine code the compiled stepping loop calls
+        besides ``llvm`` (:mod:`pfaff.derive.loopcode`), made on first call and cached like it;
+        None above ``FUSED_LIMIT``. It travels as ``llvm`` does (not pickled).
     """
 
     fn: Callable
@@ -93,6 +97,7 @@ class FusedKernel:
     solves: bool = True
     ops: int = 0
     pfn: Callable | None = None
+    loop: Callable[..., tuple | None] | None = None
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);
@@ -100,7 +105,7 @@ class FusedKernel:
         state = dict(self.__dict__)
         for key in _FUNCTIONS:
             state[key] = portable(state[key])
-        state["llvm"] = None
+        state["llvm"] = state["loop"] = None
         return state
 
     def __setstate__(self, state: dict) -> None:

@@ -1,0 +1,573 @@
+"""Integrate stage: the compiled stepping loop's code, in numba (imported only when the loop runs).
+
+:func:`advance` takes DOP853 steps (the tableau, error norm and step-size controller of
+:class:`pfaff.integrate.fastrk.FloatDOP853`), projects each step's end onto the constraints
+(:func:`pfaff.numeric.projection.newton_projection`'s policy with the mass-metric correction of
+:class:`pfaff.numeric.fused.FusedLinearization`), integrates the work of the applied forces
+(the method's own quadrature over a step, four Gauss–Legendre nodes on the dense output up to a
+reported time), and writes the reported states (at ``t_eval`` from the dense output, projected;
+else every step's end) into arrays. The model's functions are machine code called through their
+C entry points (:mod:`pfaff.numeric.machineloop`): nothing returns to Python inside a call.
+
+Whatever the Python path would treat in its own way (non-finite values, M not positive
+definite, a projection that cannot reach the constraints, a step size underflowing, an
+overflowing power) ends the call with :data:`BAIL` at the start of that step, every array as it
+was before it: the driver takes that step in Python, which then fails, or falls back, exactly as
+it always did.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+from scipy.integrate import DOP853
+
+from pfaff.integrate.fastrk import _EXPONENT, MAX_FACTOR, MIN_FACTOR, SAFETY
+from pfaff.integrate.pace import COLLAPSE, EPS, ULPS, WINDOW
+from pfaff.integrate.work import GAUSS_W, GAUSS_X
+from pfaff.numeric.projection import DAMPING, SHRUNK
+
+# what advance returns: the span's end, the budget used (or a window for the driver's Pace to
+# judge), a step for the Python path, a failed window (the Pace's failure, its last step taken)
+END, MORE, BAIL, STALL = 0, 1, 2, 3
+# the run's float state and integer counters (indices into ``s`` and ``c``)
+T, H, T_BOUND, MAX_STEP, RTOL, TOL, WORK, UNREACHED, START, LARGEST, LAST_T = range(11)
+NFEV, STEPS, REJECTED, RESTARTS, PROJECTIONS, ITERATIONS, K_EVAL, N_OUT, N_STEP = range(9)
+BUDGET, MAX_ITER, FLAGS, PACE_STEPS, PACE_COUNT = range(9, 14)
+HAS_TE, PROJECT_OUT, HAS_POWER, QUIET = 1, 2, 4, 8  # bits of c[FLAGS]
+
+
+def _nonzero(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's nonzero coefficients, in column order, and their columns (a row's sums run
+    over these only, as FloatDOP853's generated code writes them), zero-padded; the last
+    column holds the row's count."""
+    coefs, cols = np.zeros(rows.shape), np.zeros((len(rows), rows.shape[1] + 1), dtype=np.int64)
+    for r, row in enumerate(rows):
+        (nz,) = np.nonzero(row)
+        coefs[r, : nz.size], cols[r, : nz.size], cols[r, -1] = row[nz], nz, nz.size
+    return coefs, cols
+
+
+TABLEAU = (
+    *_nonzero(DOP853.A), *_nonzero(DOP853.B[None, :]), np.array(DOP853.C, dtype=float),
+    *_nonzero(np.vstack([DOP853.E5, DOP853.E3])), *_nonzero(DOP853.A_EXTRA),
+    np.array(DOP853.C_EXTRA, dtype=float), np.ascontiguousarray(DOP853.D, dtype=float),
+    np.array(GAUSS_X, dtype=float), np.array(GAUSS_W, dtype=float),
+)  # fmt: skip
+# (A, its columns, B, its columns, C, [E5; E3], their columns, A_EXTRA, its columns, C_EXTRA,
+# D, the Gauss nodes and weights)
+A_, AJ, B_, BJ, C_, E_, EJ, AX, AXJ, CX, D_, GX, GW = range(13)
+SHIFT = DAMPING**2
+
+
+def _inner(fn):
+    """A helper of :func:`advance`: compiled with it (and kept in its cache entry)."""
+    return njit(error_model="numpy")(fn)
+
+
+def _jit(fn):
+    """``njit`` with numba's on-disk cache (beside this file, or numba's user-wide folder when
+    that is read-only, or ``NUMBA_CACHE_DIR``); without it where no folder is writable."""
+    try:
+        return njit(cache=True, error_model="numpy")(fn)
+    except RuntimeError:  # "no locator available": compiled once per process instead
+        return njit(error_model="numpy")(fn)
+
+
+@intrinsic
+def _call(typingctx, addr, out, inp, data):
+    """Call ``void *f(double *out, const double *in, void *data)`` at the address ``addr``."""
+    sig = types.void(types.int64, out, inp, types.int64)
+
+    def codegen(context, builder, signature, args):
+        a, o, i, d = args
+        dptr, vptr = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer()
+        fnty = ir.FunctionType(vptr, [dptr, dptr, vptr])
+        fptr = builder.inttoptr(a, fnty.as_pointer())
+        oarr = context.make_array(signature.args[1])(context, builder, o)
+        iarr = context.make_array(signature.args[2])(context, builder, i)
+        builder.call(fptr, [oarr.data, iarr.data, builder.inttoptr(d, vptr)])
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@_inner
+def _rhs(fns, rin, rout, t, y, k):
+    """k = [q̇, q̈] at (t, y); False where any is not finite."""
+    n2 = y.size
+    rin[0] = t
+    for i in range(n2):
+        rin[1 + i] = y[i]
+    _call(fns[0], rout, rin, fns[1])
+    for i in range(n2):
+        v = rout[i]
+        if not math.isfinite(v):
+            return False
+        k[i] = v
+    return True
+
+
+@_inner
+def _combine(y, h, coefs, cols, K, out):
+    """out = y + h Σ_j coefs[j] K[cols[j]] over a row's nonzero coefficients (``cols[-1]`` of
+    them), each sum in column order: the sums of FloatDOP853's generated code."""
+    count = cols[cols.size - 1]
+    for i in range(y.size):
+        acc = 0.0
+        for j in range(count):
+            acc += coefs[j] * K[cols[j], i]
+        out[i] = y[i] + h * acc
+
+
+@_inner
+def _copy(src, dst):
+    for i in range(src.size):
+        dst[i] = src[i]
+
+
+@_inner
+def _attempt(fns, rin, rout, tab, t, h, y, K, Ys, yn):
+    """One DOP853 attempt from (t, y) with K[0] = f: the stages K[1..12], their states Ys and
+    the new state yn; False where a stage is not finite."""
+    A, AJ_, C = tab[A_], tab[AJ], tab[C_]
+    _copy(y, Ys[0])
+    for s in range(1, 12):
+        _combine(y, h, A[s], AJ_[s], K, Ys[s])
+        if not _rhs(fns, rin, rout, t + C[s] * h, Ys[s], K[s]):
+            return False
+    _combine(y, h, tab[B_][0], tab[BJ][0], K, yn)
+    return _rhs(fns, rin, rout, t + h, yn, K[12])
+
+
+@_inner
+def _error(tab, K, y, yn, atol, rtol, h_abs, a, b):
+    """DOP853's error norm of the attempt (SciPy's, as FloatDOP853 computes it); ``a``, ``b``
+    scratch of shape (2n,)."""
+    E, EJ_ = tab[E_], tab[EJ]
+    n2, n5, n3 = y.size, EJ_[0, 13], EJ_[1, 13]
+    for i in range(n2):
+        x5 = x3 = 0.0
+        for j in range(n5):
+            x5 += E[0, j] * K[EJ_[0, j], i]
+        for j in range(n3):
+            x3 += E[1, j] * K[EJ_[1, j], i]
+        a[i], b[i] = x5, x3
+    s5 = s3 = 0.0
+    for i in range(n2):
+        sc = atol[i] + max(abs(y[i]), abs(yn[i])) * rtol
+        x5, x3 = a[i] / sc, b[i] / sc
+        s5 += x5 * x5
+        s3 += x3 * x3
+    if s5 == 0.0 and s3 == 0.0:
+        return 0.0
+    return h_abs * s5 / math.sqrt(n2 * (s5 + 0.01 * s3))
+
+
+@_inner
+def _power(fns, cin, pout, t, y):
+    cin[0] = t
+    for i in range(y.size):
+        cin[1 + i] = y[i]
+    _call(fns[4], pout, cin, fns[5])
+    return pout[0]
+
+
+@_inner
+def _sum(terms, count):
+    """Neumaier's compensated sum of ``terms[:count]`` (the Python path's ``math.fsum``); NaN
+    when a term is not finite or overflows (``integrate.work.checked_sum`` fails there)."""
+    total = comp = 0.0
+    for i in range(count):
+        v = terms[i]
+        if not (math.isfinite(v) and abs(v) < 1e300):
+            return np.nan
+        s = total + v
+        comp += (total - s) + v if abs(total) >= abs(v) else (v - s) + total
+        total = s
+    return total + comp
+
+
+@_inner
+def _step_work(fns, cin, pout, tab, t, h, Ys, terms):
+    """∫ P dt over the step by the method's quadrature, h Σ b_i P(t_i, y_i)."""
+    B, BJ_, C = tab[B_][0], tab[BJ][0], tab[C_]
+    count = BJ_[12]
+    for k in range(count):
+        i = BJ_[k]
+        terms[k] = B[k] * _power(fns, cin, pout, t + C[i] * h, Ys[i])
+    return h * _sum(terms, count)
+
+
+@_inner
+def _dense_coefficients(fns, rin, rout, tab, t, h, y0, y1, K, F, tmp):
+    """The 7th-degree interpolant of the step (three more stages): F as SciPy forms it."""
+    AXs, AXJ_, CXs, D = tab[AX], tab[AXJ], tab[CX], tab[D_]
+    n2 = y0.size
+    for e in range(3):
+        s = 13 + e
+        _combine(y0, h, AXs[e], AXJ_[e], K, tmp)
+        if not _rhs(fns, rin, rout, t + CXs[e] * h, tmp, K[s]):
+            return False
+    for i in range(n2):
+        dy = y1[i] - y0[i]
+        F[0, i] = dy
+        F[1, i] = h * K[0, i] - dy
+        F[2, i] = 2.0 * dy - h * (K[12, i] + K[0, i])
+        for r in range(4):
+            acc = 0.0
+            for j in range(16):
+                acc += D[r, j] * K[j, i]
+            F[3 + r, i] = h * acc
+    return True
+
+
+@_inner
+def _dense_at(F, y0, t_old, h, t, out):
+    """The interpolant at t (SciPy's evaluation of F, highest row first)."""
+    x = (t - t_old) / h
+    for i in range(y0.size):
+        v = 0.0
+        for r in range(7):
+            v += F[6 - r, i]
+            v *= x if r % 2 == 0 else 1.0 - x
+        out[i] = v + y0[i]
+
+
+@_inner
+def _dense_work(fns, cin, pout, tab, F, y0, t_old, h, b, tmp, terms):
+    """∫ P dt from the step's start to ``b`` inside it: four Gauss–Legendre nodes on the dense
+    output (:func:`pfaff.integrate.work.dense_work`)."""
+    GXs, GWs = tab[GX], tab[GW]
+    if b <= t_old:
+        return 0.0
+    for k in range(4):
+        tk = t_old + (b - t_old) * (GXs[k] + 1.0) / 2.0
+        _dense_at(F, y0, t_old, h, tk, tmp)
+        terms[k] = GWs[k] * _power(fns, cin, pout, tk, tmp)
+    return 0.5 * (b - t_old) * _sum(terms, 4)
+
+
+@_inner
+def _linearize(fns, cin, cout, mass, acon, hol, t, y, tol, M, A, b, f, thr):
+    """M, A, b, f (holonomic rows) and the rows' thresholds at (t, y); the position excess
+    max |f_i| / thr_i, or −1 where the constraint code is not finite."""
+    n2, m = y.size, hol.size
+    cin[0] = t
+    for i in range(n2):
+        cin[1 + i] = y[i]
+    _call(fns[2], cout, cin, fns[3])
+    for i in range(cout.size):
+        if not math.isfinite(cout[i]):
+            return -1.0
+    nM, nA = mass.shape[0], acon.shape[0]  # (M and A are zero outside their patterns)
+    for s in range(nM):
+        M[mass[s, 0], mass[s, 1]] = M[mass[s, 1], mass[s, 0]] = cout[s]
+    top = 0.0
+    for i in range(m):
+        thr[i] = 0.0  # (the squared row norm, for now)
+    for s in range(nA):
+        a = cout[nM + s]
+        A[acon[s, 0], acon[s, 1]] = a
+        thr[acon[s, 0]] += a * a
+    for i in range(m):
+        top = max(top, thr[i])
+    top = math.sqrt(top)
+    if top == 0.0:
+        top = 1e-300
+    excess = 0.0
+    for i in range(m):
+        thr[i] = tol * min(1.0, max(SHRUNK, math.sqrt(thr[i]) / top))
+        b[i] = cout[nM + nA + i]
+        f[i] = cout[nM + nA + m + i] if hol[i] != 0.0 else 0.0
+        excess = max(excess, abs(f[i]) / thr[i])
+    return excess
+
+
+@_inner
+def _velocities(acon, cout, b, y, thr, g):
+    """g = A q̇ + b (A's entries in ``con``'s order) and the velocity excess max |g_i| / thr_i."""
+    n, m, nA = y.size // 2, b.size, acon.shape[0]
+    nM = cout.size - nA - 2 * m
+    _copy(b, g)
+    for s in range(nA):
+        g[acon[s, 0]] += cout[nM + s] * y[n + acon[s, 1]]
+    excess = 0.0
+    for i in range(m):
+        excess = max(excess, abs(g[i]) / thr[i])
+    return excess
+
+
+@_inner
+def _cholesky(S, L):
+    """L Lᵀ = S; False where a pivot is not positive (the generated code fails there)."""
+    k = S.shape[0]
+    for j in range(k):
+        d = S[j, j]
+        for p in range(j):
+            d -= L[j, p] * L[j, p]
+        if not d > 0.0:
+            return False
+        L[j, j] = math.sqrt(d)
+        for i in range(j + 1, k):
+            v = S[i, j]
+            for p in range(j):
+                v -= L[i, p] * L[j, p]
+            L[i, j] = v / L[j, j]
+    return True
+
+
+@_inner
+def _solve(L, x):
+    """x ← (L Lᵀ)⁻¹ x in place."""
+    k = L.shape[0]
+    for i in range(k):
+        v = x[i]
+        for p in range(i):
+            v -= L[i, p] * x[p]
+        x[i] = v / L[i, i]
+    for i in range(k - 1, -1, -1):
+        v = x[i]
+        for p in range(i + 1, k):
+            v -= L[p, i] * x[p]
+        x[i] = v / L[i, i]
+
+
+@_inner
+def _correction(M, A, r, LM, Z, S, LS, lam, out):
+    """out = M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²·tr·I)⁻¹ r (``FusedKernel.cfn``); False where M or the damped
+    A M⁻¹Aᵀ is not positive definite (the Python path then corrects on arrays)."""
+    n, m = M.shape[0], A.shape[0]
+    if not _cholesky(M, LM):
+        return False
+    for r_ in range(m):
+        _copy(A[r_], Z[r_])
+        _solve(LM, Z[r_])
+    tr = 0.0
+    for i in range(m):
+        for j in range(i + 1):
+            v = 0.0
+            for k in range(n):
+                v += A[i, k] * Z[j, k]
+            S[i, j] = S[j, i] = v
+        tr += S[i, i]
+    for i in range(m):
+        S[i, i] += SHIFT * tr
+    if not _cholesky(S, LS):
+        return False
+    _copy(r, lam)
+    _solve(LS, lam)
+    for i in range(n):
+        v = 0.0
+        for k in range(m):
+            v += Z[k, i] * lam[k]
+        out[i] = v
+    return True
+
+
+@_inner
+def _project(fns, cin, cout, mass, acon, hol, t, y, tol, max_iter, w):
+    """Project y = [q, q̇] in place (``newton_projection``): (iterations, 0 nothing changed,
+    −1 bail; the residual max(|f|, |g|) reached)."""
+    M, A, LM, Z, S, LS = w.M, w.A, w.LM, w.Z, w.S, w.LS
+    b, f, g, thr, lam, delta = w.b, w.f, w.g, w.thr, w.lam, w.delta
+    n = y.size // 2
+    pe = _linearize(fns, cin, cout, mass, acon, hol, t, y, tol, M, A, b, f, thr)
+    if pe < 0.0:
+        return -1, 0.0
+    ve = _velocities(acon, cout, b, y, thr, g)
+    if max(pe, ve) <= 1.0:
+        return 0, 0.0
+    it, last = 0, np.inf
+    while pe > 1.0 and it < max_iter and pe < last:
+        if not _correction(M, A, f, LM, Z, S, LS, lam, delta):
+            return -1, 0.0
+        for i in range(n):
+            y[i] -= delta[i]
+        it, last = it + 1, pe
+        pe = _linearize(fns, cin, cout, mass, acon, hol, t, y, tol, M, A, b, f, thr)
+        if pe < 0.0:
+            return -1, 0.0
+        ve = _velocities(acon, cout, b, y, thr, g)
+    last = np.inf
+    for _ in range(max(max_iter, 1)):
+        if ve <= 1.0 or ve >= last:
+            break
+        if not _correction(M, A, g, LM, Z, S, LS, lam, delta):
+            return -1, 0.0
+        for i in range(n):
+            y[n + i] -= delta[i]
+        last = ve
+        ve = _velocities(acon, cout, b, y, thr, g)
+    reached = 0.0
+    for i in range(hol.size):
+        reached = max(reached, abs(f[i]), abs(g[i]))
+    return max(it, 1), reached
+
+
+class Work(NamedTuple):
+    """Scratch arrays of one run (made once by :func:`workspace`)."""
+
+    K: np.ndarray  # (16, 2n): the stages, three more for the dense output
+    Ys: np.ndarray  # (12, 2n): the stage states
+    yn: np.ndarray  # (2n,): the step's end as computed
+    yp: np.ndarray  # (2n,): the step's end projected
+    fp: np.ndarray  # (2n,): the derivative there
+    yd: np.ndarray  # (2n,): a dense-output state
+    tmp: np.ndarray  # (2n,)
+    F: np.ndarray  # (7, 2n): the interpolant's coefficients
+    terms: np.ndarray  # (12,): a quadrature's terms
+    M: np.ndarray  # (n, n)
+    A: np.ndarray  # (m, n)
+    LM: np.ndarray  # (n, n)
+    Z: np.ndarray  # (m, n)
+    S: np.ndarray  # (m, m)
+    LS: np.ndarray  # (m, m)
+    b: np.ndarray  # (m,)
+    f: np.ndarray  # (m,)
+    g: np.ndarray  # (m,)
+    thr: np.ndarray  # (m,)
+    lam: np.ndarray  # (m,)
+    delta: np.ndarray  # (n,)
+
+
+def workspace(n: int, m: int) -> Work:
+    """The scratch arrays of a system of n coordinates and m constraints."""
+    n2 = 2 * n
+    vec = [np.zeros(n2) for _ in range(5)]
+    return Work(
+        np.zeros((16, n2)), np.zeros((12, n2)), *vec, np.zeros((7, n2)), np.zeros(12),
+        np.zeros((n, n)), np.zeros((m, n)), np.zeros((n, n)), np.zeros((m, n)),
+        np.zeros((m, m)), np.zeros((m, m)), *(np.zeros(m) for _ in range(5)), np.zeros(n),
+    )  # fmt: skip
+
+
+@_jit
+def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y, f, te,
+            out_t, out_y, out_w, w):  # fmt: skip
+    """Take steps from (s[T], y, f) until the span's end (:data:`END`), ``c[BUDGET]`` steps or
+    a full window the driver judges (:data:`MORE`), a step the Python path must take
+    (:data:`BAIL`) or a window that fails the pace's test (:data:`STALL`).
+
+    Every accepted step updates y (projected), f, s[T], s[H], s[WORK], the counters in ``c``
+    and the pace's history (:class:`pfaff.integrate.pace.Pace`: its steps, window and largest
+    step); each reported state goes to ``out_t``, ``out_y``, ``out_w`` (``c[N_OUT]`` of them).
+    A step that bails changes nothing.
+    """
+    flags = c[FLAGS]
+    has_te, project_out, has_power = flags & HAS_TE, flags & PROJECT_OUT, flags & HAS_POWER
+    m = hol.size
+    K, Ys, yn, yp, fp, yd = w.K, w.Ys, w.yn, w.yp, w.fp, w.yd
+    tol, max_iter = s[TOL], c[MAX_ITER]
+    while c[N_STEP] < c[BUDGET]:
+        t = s[T]
+        if t >= s[T_BOUND]:
+            return END
+        if not has_te and c[N_OUT] >= out_t.size:
+            return MORE
+        # ---- one accepted step (FloatDOP853._step_impl)
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        h_abs = min(max(s[H], min_step), s[MAX_STEP])
+        rejected, nfev, nrej = False, 0, 0
+        _copy(f, K[0])
+        while True:
+            if h_abs < min_step:
+                return BAIL
+            t_new = t + h_abs
+            if t_new - s[T_BOUND] > 0:
+                t_new = s[T_BOUND]
+            h = t_new - t
+            h_abs = abs(h)
+            nfev += 12
+            if not _attempt(fns, rin, rout, tab, t, h, y, K, Ys, yn):
+                return BAIL
+            err = _error(tab, K, y, yn, atol, s[RTOL], h_abs, w.tmp, yd)
+            if err < 1.0:
+                factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err**_EXPONENT)
+                h_next = h_abs * (min(1.0, factor) if rejected else factor)
+                break
+            h_abs *= max(MIN_FACTOR, SAFETY * err**_EXPONENT)
+            rejected, nrej = True, nrej + 1
+        # ---- the work over it, the reported times inside it, its projected end
+        step_work = 0.0
+        if has_power:
+            step_work = _step_work(fns, cin, pout, tab, t, h, Ys, w.terms)
+            if not math.isfinite(step_work):
+                return BAIL
+        k, n_out, proj, iters = c[K_EVAL], c[N_OUT], 0, 0
+        dense = False
+        while has_te and k < te.size and te[k] <= t_new:
+            if not dense:
+                nfev += 3
+                if not _dense_coefficients(fns, rin, rout, tab, t, h, y, yn, K, w.F, w.tmp):
+                    return BAIL
+                dense = True
+            _dense_at(w.F, y, t, h, te[k], yd)
+            wk = 0.0
+            if has_power:
+                wk = _dense_work(fns, cin, pout, tab, w.F, y, t, h, te[k], w.tmp, w.terms)
+                if not math.isfinite(wk):
+                    return BAIL
+            if project_out and m:
+                it, _ = _project(fns, cin, cout, mass, acon, hol, te[k], yd, tol, max_iter, w)
+                if it < 0:
+                    return BAIL
+                if it:
+                    proj, iters = proj + 1, iters + it
+            out_t[n_out] = te[k]
+            _copy(yd, out_y[n_out])
+            out_w[n_out] = s[WORK] + wk
+            n_out += 1
+            k += 1
+        _copy(yn, yp)
+        changed = 0
+        if m:
+            it, reached = _project(fns, cin, cout, mass, acon, hol, t_new, yp, tol, max_iter, w)
+            if it < 0 or (it and reached > s[UNREACHED] * tol):
+                return BAIL
+            changed = 1 if it else 0
+            if it:
+                proj, iters = proj + 1, iters + it
+        if changed:
+            if not _rhs(fns, rin, rout, t_new, yp, fp):  # the FSAL stage restarted
+                return BAIL
+        else:
+            _copy(K[12], fp)
+        if not has_te:
+            out_t[n_out] = t_new
+            _copy(yp, out_y[n_out])
+            out_w[n_out] = s[WORK] + step_work
+            n_out += 1
+        # ---- commit
+        _copy(yp, y)
+        _copy(fp, f)
+        s[T], s[H], s[WORK] = t_new, h_next, s[WORK] + step_work
+        c[NFEV] += nfev
+        c[STEPS] += 1
+        c[REJECTED] += nrej
+        c[RESTARTS] += changed
+        c[PROJECTIONS] += proj
+        c[ITERATIONS] += iters
+        c[K_EVAL], c[N_OUT] = k, n_out
+        c[N_STEP] += 1
+        s[LAST_T] = t
+        # ---- the pace (integrate.pace.Pace.step): a full window is judged here when only a
+        # failure can come of it, else by the driver
+        c[PACE_STEPS] += 1
+        if c[PACE_COUNT] == 0:
+            s[START] = t
+        c[PACE_COUNT] += 1
+        s[LARGEST] = max(s[LARGEST], t_new - t)
+        if c[PACE_COUNT] >= WINDOW:
+            if not flags & QUIET:
+                return MORE
+            mean = (t_new - s[START]) / c[PACE_COUNT]
+            if mean < COLLAPSE * s[LARGEST] or mean <= ULPS * EPS * abs(t_new):
+                return STALL
+            c[PACE_COUNT] = 0
+    return END if s[T] >= s[T_BOUND] else MORE
