@@ -29,6 +29,7 @@ CPU seconds the loop's code took to load or compile in this process.
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from typing import TYPE_CHECKING, Any
@@ -71,9 +72,8 @@ def _warm(kernel: Any) -> None:
     """Compile (or load from numba's cache) the kernel for the argument types of every run."""
     buffers = _Buffers(kernel, 1, 1, np.zeros(0), 4, 1, 0, 0)
     buffers.c[kernel.BUDGET] = 0  # no step: only the types matter
-    buffers.call(
-        np.zeros(6, dtype=np.int64), np.zeros((1, 2), np.int64), np.zeros((1, 2), np.int64)
-    )
+    pattern = np.zeros((1, 2), np.int64)
+    buffers.call(np.zeros(6, dtype=np.int64), pattern, pattern, np.zeros((0, 2), np.int64))
 
 
 class _Buffers:
@@ -81,7 +81,7 @@ class _Buffers:
 
     def __init__(
         self, kernel: Any, n: int, m: int, te: np.ndarray, rhs_in: int, rhs_size: int,
-        con_in: int, con_size: int,
+        con_in: int, con_size: int, eulers: int = 0,
     ) -> None:  # fmt: skip
         self.kernel, self.n = kernel, n
         self.rin, self.rout = np.zeros(rhs_in), np.zeros(rhs_size)
@@ -92,14 +92,14 @@ class _Buffers:
         self.te = np.ascontiguousarray(te, dtype=float)
         cap = te.size if te.size else CHUNK  # (every step is reported only without t_eval)
         self.out_t, self.out_y, self.out_w = np.zeros(cap), np.zeros((cap, 2 * n)), np.zeros(cap)
-        self.work = kernel.workspace(n, m)
+        self.work = kernel.workspace(n, m, eulers)
 
-    def call(self, fns: np.ndarray, mass: np.ndarray, acon: np.ndarray) -> int:
+    def call(self, fns: np.ndarray, mass: np.ndarray, acon: np.ndarray, euler: np.ndarray) -> int:
         k = self.kernel
         return k.advance(
             fns, self.rin, self.rout, self.cin, self.cout, self.pout, mass, acon, self.hol,
             k.TABLEAU, self.s, self.c, self.atol, self.y, self.f, self.te, self.out_t,
-            self.out_y, self.out_w, self.work,
+            self.out_y, self.out_w, euler, self.work,
         )  # fmt: skip
 
 
@@ -114,8 +114,11 @@ class CompiledLoop:
         solver = st.solver
         n, m = st.n, len(code.holonomic)
         self.stepper, self.code = st, code
+        eulers = [(i, symmetric) for _, i, _, symmetric in run.events.eulers]
+        self.euler = np.array(eulers, dtype=np.int64).reshape(-1, 2)
+        self.eulers = [(int(i), bool(sym)) for i, sym in eulers]
         b = _Buffers(kernel, n, m, np.zeros(0) if te is None else te, code.rhs_in.size,
-                     code.rhs_size, code.con_in.size, code.con_size)  # fmt: skip
+                     code.rhs_size, code.con_in.size, code.con_size, len(eulers))  # fmt: skip
         b.rin[:], b.cin[: code.con_in.size], b.hol[:] = code.rhs_in, code.con_in, code.holonomic
         b.atol[:] = solver.atol
         s, K = b.s, kernel
@@ -149,10 +152,16 @@ class CompiledLoop:
         c[K.K_EVAL] = k
         c[K.BUDGET] = CHUNK if pace.max_steps is None else min(CHUNK, pace.max_steps - pace.steps)
         c[K.PACE_STEPS], c[K.PACE_COUNT], s[K.START], s[K.LARGEST] = pace.history()
-        c[K.FLAGS] = c[K.FLAGS] & ~K.QUIET | (K.QUIET if pace.quiet else 0)
-        code = b.call(self.code.functions, self.code.mass, self.code.acon)
+        c[K.FLAGS] = c[K.FLAGS] & ~(K.QUIET | K.HAS_BEFORE) | (K.QUIET if pace.quiet else 0)
+        if self.euler.size and run._last_q is not None:  # the Euler angles' last check
+            c[K.FLAGS] |= K.HAS_BEFORE
+            q = run._last_q
+            b.work.angles[:] = [math.sin(q[i]) if sym else math.cos(q[i]) for i, sym in self.eulers]
+        code = b.call(self.code.functions, self.code.mass, self.code.acon, self.euler)
         steps = int(c[K.N_STEP])
         self._sync(steps)
+        if steps and self.euler.size:
+            run._last_q = b.y[: b.n].copy()
         if code == K.BAIL:
             self.bailed = True
             if not steps:
@@ -200,7 +209,7 @@ def compiled_loop(run: Any, model: Any) -> tuple[CompiledLoop | None, str]:
     st = run.stepper
     if type(st) is not ProjectedRK or not isinstance(st.solver, FloatDOP853):
         return None, ""  # another method (or a subclass): not a candidate
-    if run.user or run.events or getattr(model, "contacts", None):
+    if run.user or run.events.mrps or getattr(model, "contacts", None):
         return None, "events"
     make = getattr(model, "machine_loop", None)
     if make is None:

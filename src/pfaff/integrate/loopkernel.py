@@ -27,6 +27,7 @@ from numba import njit, types
 from numba.extending import intrinsic
 from scipy.integrate import DOP853
 
+from pfaff.integrate.events import SINGULAR
 from pfaff.integrate.fastrk import _EXPONENT, MAX_FACTOR, MIN_FACTOR, SAFETY
 from pfaff.integrate.pace import COLLAPSE, EPS, ULPS, WINDOW
 from pfaff.integrate.work import GAUSS_W, GAUSS_X
@@ -39,7 +40,7 @@ END, MORE, BAIL, STALL = 0, 1, 2, 3
 T, H, T_BOUND, MAX_STEP, RTOL, TOL, WORK, UNREACHED, START, LARGEST, LAST_T = range(11)
 NFEV, STEPS, REJECTED, RESTARTS, PROJECTIONS, ITERATIONS, K_EVAL, N_OUT, N_STEP = range(9)
 BUDGET, MAX_ITER, FLAGS, PACE_STEPS, PACE_COUNT = range(9, 14)
-HAS_TE, PROJECT_OUT, HAS_POWER, QUIET = 1, 2, 4, 8  # bits of c[FLAGS]
+HAS_TE, PROJECT_OUT, HAS_POWER, QUIET, HAS_BEFORE = 1, 2, 4, 8, 16  # bits of c[FLAGS]
 
 
 def _nonzero(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -410,6 +411,26 @@ def _project(fns, cin, cout, mass, acon, hol, t, y, tol, max_iter, w):
     return max(it, 1), reached
 
 
+@_inner
+def _angles(euler, y, out):
+    """sin (a symmetric sequence, 3-1-3) or cos (3-2-1) of each Euler set's second angle."""
+    for e in range(euler.shape[0]):
+        v = y[euler[e, 0]]
+        out[e] = math.sin(v) if euler[e, 1] else math.cos(v)
+
+
+@_inner
+def _singular(euler, y, before, has_before):
+    """Whether some Euler set is at its singularity at y or crossed it since ``before``
+    (:meth:`pfaff.integrate.events.AttitudeEvents.singular`)."""
+    for e in range(euler.shape[0]):
+        v = y[euler[e, 0]]
+        value = math.sin(v) if euler[e, 1] else math.cos(v)
+        if abs(value) < SINGULAR or (has_before and value * before[e] < 0):
+            return True
+    return False
+
+
 class Work(NamedTuple):
     """Scratch arrays of one run (made once by :func:`workspace`)."""
 
@@ -434,22 +455,24 @@ class Work(NamedTuple):
     thr: np.ndarray  # (m,)
     lam: np.ndarray  # (m,)
     delta: np.ndarray  # (n,)
+    angles: np.ndarray  # (e,): the Euler sets' tested function at the last step's end
 
 
-def workspace(n: int, m: int) -> Work:
-    """The scratch arrays of a system of n coordinates and m constraints."""
+def workspace(n: int, m: int, e: int = 0) -> Work:
+    """The scratch arrays of a system of n coordinates, m constraints and e Euler sets."""
     n2 = 2 * n
     vec = [np.zeros(n2) for _ in range(5)]
     return Work(
         np.zeros((16, n2)), np.zeros((12, n2)), *vec, np.zeros((7, n2)), np.zeros(12),
         np.zeros((n, n)), np.zeros((m, n)), np.zeros((n, n)), np.zeros((m, n)),
         np.zeros((m, m)), np.zeros((m, m)), *(np.zeros(m) for _ in range(5)), np.zeros(n),
+        np.zeros(e),
     )  # fmt: skip
 
 
 @_jit
 def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y, f, te,
-            out_t, out_y, out_w, w):  # fmt: skip
+            out_t, out_y, out_w, euler, w):  # fmt: skip
     """Take steps from (s[T], y, f) until the span's end (:data:`END`), ``c[BUDGET]`` steps or
     a full window the driver judges (:data:`MORE`), a step the Python path must take
     (:data:`BAIL`) or a window that fails the pace's test (:data:`STALL`).
@@ -543,6 +566,8 @@ def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y
             _copy(yp, out_y[n_out])
             out_w[n_out] = s[WORK] + step_work
             n_out += 1
+        if euler.shape[0] and _singular(euler, yp, w.angles, c[FLAGS] & HAS_BEFORE):
+            return BAIL  # the Python path takes this step, and stops the run after it
         # ---- commit
         _copy(yp, y)
         _copy(fp, f)
@@ -555,6 +580,9 @@ def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y
         c[ITERATIONS] += iters
         c[K_EVAL], c[N_OUT] = k, n_out
         c[N_STEP] += 1
+        if euler.shape[0]:
+            _angles(euler, y, w.angles)
+            c[FLAGS] |= HAS_BEFORE
         s[LAST_T] = t
         # ---- the pace (integrate.pace.Pace.step): a full window is judged here when only a
         # failure can come of it, else by the driver

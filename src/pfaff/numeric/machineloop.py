@@ -19,12 +19,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pfaff.numeric.field import AccelerationField
 from pfaff.numeric.kkt import FLOOR
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from pfaff.numeric.field import AccelerationField
     from pfaff.numeric.model import NumericModel
 
 
@@ -73,6 +73,8 @@ def entry_point(fn: Callable | None) -> tuple[int, int]:
 def machine_loop(model: NumericModel, field: AccelerationField) -> tuple[LoopCode | None, str]:
     """The loop's machine code for a run of ``model`` on ``field`` (its ODE function), or None
     and the reason it does not apply."""
+    if type(field) is not AccelerationField:
+        return None, "the run's ODE function is not the model's own"
     fk, run = model._fused, model._run_state
     if fk is None or not fk.solves or fk.rfn is None or fk.loop is None:
         return None, "the model has no generated right-hand side with its solve"
