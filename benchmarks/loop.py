@@ -51,7 +51,7 @@ from scipy.integrate import solve_ivp
 import pfaff
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from engines import PUSH, chain_values, mj_chain, pin_chain  # noqa: E402
+from engines import PUSH, chain_values, mj_chain, pin_chain
 
 G, LINKS, SPAN = 9.81, 8, 10.0
 
@@ -135,7 +135,9 @@ def chain(rounds: int) -> None:
     pm, pd = pin_chain(LINKS)
 
     def aba(t: float, y: np.ndarray) -> np.ndarray:
-        return np.concatenate([y[LINKS + 1 :], pin.aba(pm, pd, y[: LINKS + 1], y[LINKS + 1 :], tau)])
+        return np.concatenate(
+            [y[LINKS + 1 :], pin.aba(pm, pd, y[: LINKS + 1], y[LINKS + 1 :], tau)]
+        )
 
     def ivp(rtol: float = 1e-9, atol: float = 1e-11) -> np.ndarray:
         y0 = np.concatenate([rel0, np.zeros(LINKS + 1)])
@@ -177,7 +179,9 @@ def chain(rounds: int) -> None:
     errs = [err_pfaff, np.abs(relative(python_path(run)().q[-1]) - ref).max(), err_mj,
             np.abs(ivp() - ref).max()]  # fmt: skip
     mj_time = t[f"MuJoCo RK4 rollout ({steps} steps)"]
-    print(f"\n## chain: {LINKS} links on a cart pushed by F = {PUSH}, {SPAN:g} s, equal end error\n")
+    print(
+        f"\n## chain: {LINKS} links on a cart pushed by F = {PUSH}, {SPAN:g} s, equal end error\n"
+    )
     print("| contender | CPU s | MuJoCo / this | end error (rad, m) | stepping |")
     print("|---|---|---|---|---|")
     stepping = run().stats["stepping"]

@@ -100,18 +100,19 @@ def _call(typingctx, addr, out, inp, data):
 
 @_inner
 def _rhs(fns, rin, rout, t, y, k):
-    """k = [q̇, q̈] at (t, y); False where any is not finite."""
+    """k = [q̇, q̈] at (t, y); False where they are not finite (their sum, as
+    :func:`pfaff.numeric.evaluator.machine_rhs` tests them)."""
     n2 = y.size
     rin[0] = t
     for i in range(n2):
         rin[1 + i] = y[i]
     _call(fns[0], rout, rin, fns[1])
+    total = 0.0
     for i in range(n2):
         v = rout[i]
-        if not math.isfinite(v):
-            return False
+        total += v
         k[i] = v
-    return True
+    return math.isfinite(total)
 
 
 @_inner
@@ -459,7 +460,14 @@ class Work(NamedTuple):
 
 
 def workspace(n: int, m: int, e: int = 0) -> Work:
-    """The scratch arrays of a system of n coordinates, m constraints and e Euler sets."""
+    """The scratch arrays of a system of n coordinates, m constraints and e Euler sets.
+
+    Examples
+    --------
+    >>> w = workspace(2, 1)
+    >>> w.K.shape, w.M.shape, w.A.shape, w.angles.shape
+    ((16, 4), (2, 2), (1, 2), (0,))
+    """
     n2 = 2 * n
     vec = [np.zeros(n2) for _ in range(5)]
     return Work(

@@ -63,7 +63,16 @@ class LoopCode:
 
 
 def entry_point(fn: Callable | None) -> tuple[int, int]:
-    """(address, user_data) of a SymEngine LLVM function's C entry point; (0, 0) for None."""
+    """(address, user_data) of a SymEngine LLVM function's C entry point; (0, 0) for None.
+
+    Examples
+    --------
+    >>> import symengine as se
+    >>> x = se.Symbol("x")
+    >>> address, data = entry_point(se.Lambdify([x], [2 * x], backend="llvm"))
+    >>> address > 0 and data > 0, entry_point(None)
+    (True, (0, 0))
+    """
     if fn is None:
         return 0, 0
     cfunc, data = fn.as_ctypes()  # type: ignore[attr-defined]
@@ -72,7 +81,26 @@ def entry_point(fn: Callable | None) -> tuple[int, int]:
 
 def machine_loop(model: NumericModel, field: AccelerationField) -> tuple[LoopCode | None, str]:
     """The loop's machine code for a run of ``model`` on ``field`` (its ODE function), or None
-    and the reason it does not apply."""
+    and the reason it does not apply.
+
+    Parameters
+    ----------
+    model : NumericModel
+        A run copy (``model.for_run()``), after ``check_determined`` at the run's first state.
+    field : AccelerationField
+        ``model.ode_function(start=...)``: its reference row sizes set the floor's τ.
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> m = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+    >>> run = m.for_run()
+    >>> code, why = machine_loop(run, run.ode_function(start=(0.0, np.array([1.0, 0.0]), np.zeros(2))))
+    >>> code.mass.tolist(), code.acon.tolist(), code.rhs_size, why  # M diagonal, A = [2x, 2y]
+    ([[0, 0], [1, 1]], [[0, 0], [0, 1]], 14, '')
+    >>> machine_loop(run, run.ode_function(alpha=10.0, beta=10.0))[1]  # Baumgarte
+    'the run stabilizes, rescales the floor, or has inputs'
+    """
     if type(field) is not AccelerationField:
         return None, "the run's ODE function is not the model's own"
     fk, run = model._fused, model._run_state
