@@ -58,7 +58,7 @@ def _kernel() -> tuple[Any, str]:
             _KERNEL.append(loopkernel)
         except ImportError:
             _KERNEL.append("numba is not installed")
-        except Exception as e:  # numba could not compile it: the Python path, once warned
+        except Exception as e:  # numba could not compile it: the Python path (the reason in stats)
             _KERNEL.append(f"numba failed ({type(e).__name__}: {str(e)[:120]})")
         _KERNEL.append(time.process_time() - start)
     kernel = _KERNEL[0]
