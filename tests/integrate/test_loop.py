@@ -205,3 +205,23 @@ def test_where_it_does_not_apply(pendulum: pfaff.NumericModel) -> None:
     ):
         tr = pfaff.simulate(pendulum, [1.0, 0.0], [0.0, 0.0], (0, 0.5), **kw)
         assert tr.stats["stepping"] == "python" and tr.status == "success"
+
+
+def test_ctrl_c_keeps_what_the_loop_recorded(
+    pendulum: pfaff.NumericModel, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C between two calls of the loop: status "interrupted", the states recorded so far
+    (every step of the first call) kept, on the constraints."""
+    real, calls = loop.CompiledLoop.advance, []
+
+    def advance(self: loop.CompiledLoop, run: object, k: int, work: float) -> object:
+        calls.append(k)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(self, run, k, work)
+
+    monkeypatch.setattr(loop.CompiledLoop, "advance", advance)
+    tr = pfaff.simulate(pendulum, [1.0, 0.0], [0.0, 0.0], (0, 50))
+    assert tr.status == "interrupted" and tr.stats["stepping"] == "compiled loop"
+    assert len(tr.t) == tr.stats["steps"] + 1 > 2 and tr.t[-1] < 50
+    assert np.abs(tr.constraint_residual).max() <= 1e-10
