@@ -22,16 +22,14 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from llvmlite import ir
-from numba import njit, types
-from numba.extending import intrinsic
 from scipy.integrate import DOP853
 
 from pfaff.integrate.events import SINGULAR
 from pfaff.integrate.fastrk import _EXPONENT, MAX_FACTOR, MIN_FACTOR, SAFETY
+from pfaff.integrate.loopbase import cached, call_entry, copy_into, helper
+from pfaff.integrate.loopproject import project
 from pfaff.integrate.pace import COLLAPSE, EPS, ULPS, WINDOW
 from pfaff.integrate.work import GAUSS_W, GAUSS_X
-from pfaff.numeric.projection import DAMPING, SHRUNK
 
 # what advance returns: the span's end, the budget used (or a window for the driver's Pace to
 # judge), a step for the Python path, a failed window (the Pace's failure, its last step taken)
@@ -63,42 +61,9 @@ TABLEAU = (
 # (A, its columns, B, its columns, C, [E5; E3], their columns, A_EXTRA, its columns, C_EXTRA,
 # D, the Gauss nodes and weights)
 A_, AJ, B_, BJ, C_, E_, EJ, AX, AXJ, CX, D_, GX, GW = range(13)
-SHIFT = DAMPING**2
 
 
-def _inner(fn):
-    """A helper of :func:`advance`: compiled with it (and kept in its cache entry)."""
-    return njit(error_model="numpy")(fn)
-
-
-def _jit(fn):
-    """``njit`` with numba's on-disk cache (beside this file, or numba's user-wide folder when
-    that is read-only, or ``NUMBA_CACHE_DIR``); without it where no folder is writable."""
-    try:
-        return njit(cache=True, error_model="numpy")(fn)
-    except RuntimeError:  # "no locator available": compiled once per process instead
-        return njit(error_model="numpy")(fn)
-
-
-@intrinsic
-def _call(typingctx, addr, out, inp, data):
-    """Call ``void *f(double *out, const double *in, void *data)`` at the address ``addr``."""
-    sig = types.void(types.int64, out, inp, types.int64)
-
-    def codegen(context, builder, signature, args):
-        a, o, i, d = args
-        dptr, vptr = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(vptr, [dptr, dptr, vptr])
-        fptr = builder.inttoptr(a, fnty.as_pointer())
-        oarr = context.make_array(signature.args[1])(context, builder, o)
-        iarr = context.make_array(signature.args[2])(context, builder, i)
-        builder.call(fptr, [oarr.data, iarr.data, builder.inttoptr(d, vptr)])
-        return context.get_dummy_value()
-
-    return sig, codegen
-
-
-@_inner
+@helper
 def _rhs(fns, rin, rout, t, y, k):
     """k = [q̇, q̈] at (t, y); False where they are not finite (their sum, as
     :func:`pfaff.numeric.evaluator.machine_rhs` tests them)."""
@@ -106,7 +71,7 @@ def _rhs(fns, rin, rout, t, y, k):
     rin[0] = t
     for i in range(n2):
         rin[1 + i] = y[i]
-    _call(fns[0], rout, rin, fns[1])
+    call_entry(fns[0], rout, rin, fns[1])
     total = 0.0
     for i in range(n2):
         v = rout[i]
@@ -115,7 +80,7 @@ def _rhs(fns, rin, rout, t, y, k):
     return math.isfinite(total)
 
 
-@_inner
+@helper
 def _combine(y, h, coefs, cols, K, out):
     """out = y + h Σ_j coefs[j] K[cols[j]] over a row's nonzero coefficients (``cols[-1]`` of
     them), each sum in column order: the sums of FloatDOP853's generated code."""
@@ -127,18 +92,12 @@ def _combine(y, h, coefs, cols, K, out):
         out[i] = y[i] + h * acc
 
 
-@_inner
-def _copy(src, dst):
-    for i in range(src.size):
-        dst[i] = src[i]
-
-
-@_inner
+@helper
 def _attempt(fns, rin, rout, tab, t, h, y, K, Ys, yn):
     """One DOP853 attempt from (t, y) with K[0] = f: the stages K[1..12], their states Ys and
     the new state yn; False where a stage is not finite."""
     A, AJ_, C = tab[A_], tab[AJ], tab[C_]
-    _copy(y, Ys[0])
+    copy_into(y, Ys[0])
     for s in range(1, 12):
         _combine(y, h, A[s], AJ_[s], K, Ys[s])
         if not _rhs(fns, rin, rout, t + C[s] * h, Ys[s], K[s]):
@@ -147,7 +106,7 @@ def _attempt(fns, rin, rout, tab, t, h, y, K, Ys, yn):
     return _rhs(fns, rin, rout, t + h, yn, K[12])
 
 
-@_inner
+@helper
 def _error(tab, K, y, yn, atol, rtol, h_abs, a, b):
     """DOP853's error norm of the attempt (SciPy's, as FloatDOP853 computes it); ``a``, ``b``
     scratch of shape (2n,)."""
@@ -171,16 +130,16 @@ def _error(tab, K, y, yn, atol, rtol, h_abs, a, b):
     return h_abs * s5 / math.sqrt(n2 * (s5 + 0.01 * s3))
 
 
-@_inner
+@helper
 def _power(fns, cin, pout, t, y):
     cin[0] = t
     for i in range(y.size):
         cin[1 + i] = y[i]
-    _call(fns[4], pout, cin, fns[5])
+    call_entry(fns[4], pout, cin, fns[5])
     return pout[0]
 
 
-@_inner
+@helper
 def _sum(terms, count):
     """Neumaier's compensated sum of ``terms[:count]`` (the Python path's ``math.fsum``); NaN
     when a term is not finite or overflows (``integrate.work.checked_sum`` fails there)."""
@@ -195,7 +154,7 @@ def _sum(terms, count):
     return total + comp
 
 
-@_inner
+@helper
 def _step_work(fns, cin, pout, tab, t, h, Ys, terms):
     """∫ P dt over the step by the method's quadrature, h Σ b_i P(t_i, y_i)."""
     B, BJ_, C = tab[B_][0], tab[BJ][0], tab[C_]
@@ -206,7 +165,7 @@ def _step_work(fns, cin, pout, tab, t, h, Ys, terms):
     return h * _sum(terms, count)
 
 
-@_inner
+@helper
 def _dense_coefficients(fns, rin, rout, tab, t, h, y0, y1, K, F, tmp):
     """The 7th-degree interpolant of the step (three more stages): F as SciPy forms it."""
     AXs, AXJ_, CXs, D = tab[AX], tab[AXJ], tab[CX], tab[D_]
@@ -229,7 +188,7 @@ def _dense_coefficients(fns, rin, rout, tab, t, h, y0, y1, K, F, tmp):
     return True
 
 
-@_inner
+@helper
 def _dense_at(F, y0, t_old, h, t, out):
     """The interpolant at t (SciPy's evaluation of F, highest row first)."""
     x = (t - t_old) / h
@@ -241,7 +200,7 @@ def _dense_at(F, y0, t_old, h, t, out):
         out[i] = v + y0[i]
 
 
-@_inner
+@helper
 def _dense_work(fns, cin, pout, tab, F, y0, t_old, h, b, tmp, terms):
     """∫ P dt from the step's start to ``b`` inside it: four Gauss–Legendre nodes on the dense
     output (:func:`pfaff.integrate.work.dense_work`)."""
@@ -255,164 +214,7 @@ def _dense_work(fns, cin, pout, tab, F, y0, t_old, h, b, tmp, terms):
     return 0.5 * (b - t_old) * _sum(terms, 4)
 
 
-@_inner
-def _linearize(fns, cin, cout, mass, acon, hol, t, y, tol, M, A, b, f, thr):
-    """M, A, b, f (holonomic rows) and the rows' thresholds at (t, y); the position excess
-    max |f_i| / thr_i, or −1 where the constraint code is not finite."""
-    n2, m = y.size, hol.size
-    cin[0] = t
-    for i in range(n2):
-        cin[1 + i] = y[i]
-    _call(fns[2], cout, cin, fns[3])
-    for i in range(cout.size):
-        if not math.isfinite(cout[i]):
-            return -1.0
-    nM, nA = mass.shape[0], acon.shape[0]  # (M and A are zero outside their patterns)
-    for s in range(nM):
-        M[mass[s, 0], mass[s, 1]] = M[mass[s, 1], mass[s, 0]] = cout[s]
-    top = 0.0
-    for i in range(m):
-        thr[i] = 0.0  # (the squared row norm, for now)
-    for s in range(nA):
-        a = cout[nM + s]
-        A[acon[s, 0], acon[s, 1]] = a
-        thr[acon[s, 0]] += a * a
-    for i in range(m):
-        top = max(top, thr[i])
-    top = math.sqrt(top)
-    if top == 0.0:
-        top = 1e-300
-    excess = 0.0
-    for i in range(m):
-        thr[i] = tol * min(1.0, max(SHRUNK, math.sqrt(thr[i]) / top))
-        b[i] = cout[nM + nA + i]
-        f[i] = cout[nM + nA + m + i] if hol[i] != 0.0 else 0.0
-        excess = max(excess, abs(f[i]) / thr[i])
-    return excess
-
-
-@_inner
-def _velocities(acon, cout, b, y, thr, g):
-    """g = A q̇ + b (A's entries in ``con``'s order) and the velocity excess max |g_i| / thr_i."""
-    n, m, nA = y.size // 2, b.size, acon.shape[0]
-    nM = cout.size - nA - 2 * m
-    _copy(b, g)
-    for s in range(nA):
-        g[acon[s, 0]] += cout[nM + s] * y[n + acon[s, 1]]
-    excess = 0.0
-    for i in range(m):
-        excess = max(excess, abs(g[i]) / thr[i])
-    return excess
-
-
-@_inner
-def _cholesky(S, L):
-    """L Lᵀ = S; False where a pivot is not positive (the generated code fails there)."""
-    k = S.shape[0]
-    for j in range(k):
-        d = S[j, j]
-        for p in range(j):
-            d -= L[j, p] * L[j, p]
-        if not d > 0.0:
-            return False
-        L[j, j] = math.sqrt(d)
-        for i in range(j + 1, k):
-            v = S[i, j]
-            for p in range(j):
-                v -= L[i, p] * L[j, p]
-            L[i, j] = v / L[j, j]
-    return True
-
-
-@_inner
-def _solve(L, x):
-    """x ← (L Lᵀ)⁻¹ x in place."""
-    k = L.shape[0]
-    for i in range(k):
-        v = x[i]
-        for p in range(i):
-            v -= L[i, p] * x[p]
-        x[i] = v / L[i, i]
-    for i in range(k - 1, -1, -1):
-        v = x[i]
-        for p in range(i + 1, k):
-            v -= L[p, i] * x[p]
-        x[i] = v / L[i, i]
-
-
-@_inner
-def _correction(M, A, r, LM, Z, S, LS, lam, out):
-    """out = M⁻¹Aᵀ(A M⁻¹Aᵀ + δ²·tr·I)⁻¹ r (``FusedKernel.cfn``); False where M or the damped
-    A M⁻¹Aᵀ is not positive definite (the Python path then corrects on arrays)."""
-    n, m = M.shape[0], A.shape[0]
-    if not _cholesky(M, LM):
-        return False
-    for r_ in range(m):
-        _copy(A[r_], Z[r_])
-        _solve(LM, Z[r_])
-    tr = 0.0
-    for i in range(m):
-        for j in range(i + 1):
-            v = 0.0
-            for k in range(n):
-                v += A[i, k] * Z[j, k]
-            S[i, j] = S[j, i] = v
-        tr += S[i, i]
-    for i in range(m):
-        S[i, i] += SHIFT * tr
-    if not _cholesky(S, LS):
-        return False
-    _copy(r, lam)
-    _solve(LS, lam)
-    for i in range(n):
-        v = 0.0
-        for k in range(m):
-            v += Z[k, i] * lam[k]
-        out[i] = v
-    return True
-
-
-@_inner
-def _project(fns, cin, cout, mass, acon, hol, t, y, tol, max_iter, w):
-    """Project y = [q, q̇] in place (``newton_projection``): (iterations, 0 nothing changed,
-    −1 bail; the residual max(|f|, |g|) reached)."""
-    M, A, LM, Z, S, LS = w.M, w.A, w.LM, w.Z, w.S, w.LS
-    b, f, g, thr, lam, delta = w.b, w.f, w.g, w.thr, w.lam, w.delta
-    n = y.size // 2
-    pe = _linearize(fns, cin, cout, mass, acon, hol, t, y, tol, M, A, b, f, thr)
-    if pe < 0.0:
-        return -1, 0.0
-    ve = _velocities(acon, cout, b, y, thr, g)
-    if max(pe, ve) <= 1.0:
-        return 0, 0.0
-    it, last = 0, np.inf
-    while pe > 1.0 and it < max_iter and pe < last:
-        if not _correction(M, A, f, LM, Z, S, LS, lam, delta):
-            return -1, 0.0
-        for i in range(n):
-            y[i] -= delta[i]
-        it, last = it + 1, pe
-        pe = _linearize(fns, cin, cout, mass, acon, hol, t, y, tol, M, A, b, f, thr)
-        if pe < 0.0:
-            return -1, 0.0
-        ve = _velocities(acon, cout, b, y, thr, g)
-    last = np.inf
-    for _ in range(max(max_iter, 1)):
-        if ve <= 1.0 or ve >= last:
-            break
-        if not _correction(M, A, g, LM, Z, S, LS, lam, delta):
-            return -1, 0.0
-        for i in range(n):
-            y[n + i] -= delta[i]
-        last = ve
-        ve = _velocities(acon, cout, b, y, thr, g)
-    reached = 0.0
-    for i in range(hol.size):
-        reached = max(reached, abs(f[i]), abs(g[i]))
-    return max(it, 1), reached
-
-
-@_inner
+@helper
 def _angles(euler, y, out):
     """sin (a symmetric sequence, 3-1-3) or cos (3-2-1) of each Euler set's second angle."""
     for e in range(euler.shape[0]):
@@ -420,7 +222,7 @@ def _angles(euler, y, out):
         out[e] = math.sin(v) if euler[e, 1] else math.cos(v)
 
 
-@_inner
+@helper
 def _singular(euler, y, before, has_before):
     """Whether some Euler set is at its singularity at y or crossed it since ``before``
     (:meth:`pfaff.integrate.events.AttitudeEvents.singular`)."""
@@ -478,7 +280,7 @@ def workspace(n: int, m: int, e: int = 0) -> Work:
     )  # fmt: skip
 
 
-@_jit
+@cached
 def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y, f, te,
             out_t, out_y, out_w, euler, w):  # fmt: skip
     """Take steps from (s[T], y, f) until the span's end (:data:`END`), ``c[BUDGET]`` steps or
@@ -505,7 +307,7 @@ def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         h_abs = min(max(s[H], min_step), s[MAX_STEP])
         rejected, nfev, nrej = False, 0, 0
-        _copy(f, K[0])
+        copy_into(f, K[0])
         while True:
             if h_abs < min_step:
                 return BAIL
@@ -545,20 +347,20 @@ def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y
                 if not math.isfinite(wk):
                     return BAIL
             if project_out and m:
-                it, _ = _project(fns, cin, cout, mass, acon, hol, te[k], yd, tol, max_iter, w)
+                it, _ = project(fns, cin, cout, mass, acon, hol, te[k], yd, tol, max_iter, w)
                 if it < 0:
                     return BAIL
                 if it:
                     proj, iters = proj + 1, iters + it
             out_t[n_out] = te[k]
-            _copy(yd, out_y[n_out])
+            copy_into(yd, out_y[n_out])
             out_w[n_out] = s[WORK] + wk
             n_out += 1
             k += 1
-        _copy(yn, yp)
+        copy_into(yn, yp)
         changed = 0
         if m:
-            it, reached = _project(fns, cin, cout, mass, acon, hol, t_new, yp, tol, max_iter, w)
+            it, reached = project(fns, cin, cout, mass, acon, hol, t_new, yp, tol, max_iter, w)
             if it < 0 or (it and reached > s[UNREACHED] * tol):
                 return BAIL
             changed = 1 if it else 0
@@ -568,17 +370,17 @@ def advance(fns, rin, rout, cin, cout, pout, mass, acon, hol, tab, s, c, atol, y
             if not _rhs(fns, rin, rout, t_new, yp, fp):  # the FSAL stage restarted
                 return BAIL
         else:
-            _copy(K[12], fp)
+            copy_into(K[12], fp)
         if not has_te:
             out_t[n_out] = t_new
-            _copy(yp, out_y[n_out])
+            copy_into(yp, out_y[n_out])
             out_w[n_out] = s[WORK] + step_work
             n_out += 1
         if euler.shape[0] and _singular(euler, yp, w.angles, c[FLAGS] & HAS_BEFORE):
             return BAIL  # the Python path takes this step, and stops the run after it
         # ---- commit
-        _copy(yp, y)
-        _copy(fp, f)
+        copy_into(yp, y)
+        copy_into(fp, f)
         s[T], s[H], s[WORK] = t_new, h_next, s[WORK] + step_work
         c[NFEV] += nfev
         c[STEPS] += 1
