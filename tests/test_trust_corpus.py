@@ -297,6 +297,7 @@ def test_simulate_interrupted_keeps_partial_output(monkeypatch: pytest.MonkeyPat
         step(self)
 
     monkeypatch.setattr(integrators.ProjectedRK, "step", interrupted)
+    monkeypatch.setenv("PFAFF_LOOP", "0")  # the Python stepper (the compiled loop: test_loop)
     traj = pfaff.simulate(_pendulum(), [1.0, 0.0], [0.0, 0.0], (0.0, 5.0))
     assert traj.status == "interrupted" and "interrupted" in traj.message
     assert 1 < len(traj.t) <= 5 and traj.t[-1] < 5.0

@@ -146,15 +146,21 @@ def test_sqrt_of_negative_in_generated_code_is_a_failed_run() -> None:
     assert traj.status == "failed" and "t = " in traj.message
 
 
-def test_a_bug_surfaces_as_a_bug(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A ValueError raised by pfaff's own code during a run is not reported as a failed run."""
-    from pfaff.integrate import integrators
+@pytest.mark.parametrize("path", ["python", "compiled loop"])
+def test_a_bug_surfaces_as_a_bug(monkeypatch: pytest.MonkeyPatch, path: str) -> None:
+    """A ValueError raised by pfaff's own code during a run is not reported as a failed run,
+    on the Python path (a stepper's step) and in the compiled loop's driver alike."""
+    from pfaff.integrate import integrators, loop
 
     model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
 
-    def broken(self: object) -> None:
+    def broken(self: object, *args: object) -> None:
         raise ValueError("an internal bug")
 
-    monkeypatch.setattr(integrators.ProjectedRK, "step", broken)
+    if path == "python":
+        monkeypatch.setenv("PFAFF_LOOP", "0")
+        monkeypatch.setattr(integrators.ProjectedRK, "step", broken)
+    else:
+        monkeypatch.setattr(loop.CompiledLoop, "advance", broken)
     with pytest.raises(ValueError, match="an internal bug"):
         pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0.0, 1.0))

@@ -102,6 +102,7 @@ def _generator_hash() -> str:
         "fused",
         "fusedpower",
         "machine_kernel",
+        "loopcode",
         "templates",
         "blocks",
         "equations",

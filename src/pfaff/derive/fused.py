@@ -23,6 +23,7 @@ from pfaff.core.symbols import accel, t
 from pfaff.derive import cache
 from pfaff.derive.engine import engine_safe
 from pfaff.derive.fusedpower import power_expression
+from pfaff.derive.loopcode import loop_factory
 from pfaff.derive.machine_kernel import cached_machine, kernel_factory
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.generated import Portable, register
@@ -117,7 +118,14 @@ def build_fused(eom: Derivation) -> tuple[FusedKernel | None, str]:
         _on_first_call(lambda: power_function(eom)),
         afn,
         CHECKS if solve else 0,
+        loop_factory(n, m, key, lambda: _loop_parts(eom)) if solve else None,
     ), status
+
+
+def _loop_parts(eom: Derivation) -> tuple[list, int, object, list]:
+    """What the compiled loop's machine code is made of (:mod:`pfaff.derive.loopcode`)."""
+    (mass, acon, exprs, _), args = _parts(eom)
+    return exprs, len(mass) + len(acon), power_expression(eom, _plain(eom)[0], args), args
 
 
 def power_function(eom: Derivation) -> Callable | None:

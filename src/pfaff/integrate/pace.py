@@ -124,6 +124,36 @@ class Pace:
         if self._count >= WINDOW:
             self._judge(after)
 
+    @property
+    def quiet(self) -> bool:
+        """Whether judging a window can only fail (no memory warning is left to give): then a
+        compiled loop judges the windows itself (:mod:`pfaff.integrate.loop`)."""
+        return self._warned
+
+    def history(self) -> tuple[int, int, float, float]:
+        """(steps, steps in the current window, its start, the largest step): what
+        :meth:`resume` takes."""
+        return self.steps, self._count, self._start, self.largest
+
+    def resume(self, steps: int, count: int, start: float, largest: float, after: float) -> None:
+        """Take the history a compiled loop reached by the same rule as :meth:`step` (ending
+        at ``after``), and judge the window if it is full (raising the run's failure, or
+        warning, as :meth:`step` does).
+
+        Examples
+        --------
+        >>> p = Pace(t1=10.0, max_steps=None, state_bytes=None)
+        >>> p.resume(400, 150, 1.0, 0.01, 1.5)  # 150 steps into a window: not judged yet
+        >>> try:  # 200 steps averaging 5e-9 in a run whose largest step was 1
+        ...     p.resume(600, 200, 2.0, 1.0, 2.0 + 1e-6)
+        ... except Exception as e:
+        ...     print(str(e)[:19])
+        step-size collapse:
+        """
+        self.steps, self._count, self._start, self.largest = steps, count, start, largest
+        if self._count >= WINDOW:
+            self._judge(after)
+
     def _judge(self, after: float) -> None:
         mean = (after - self._start) / self._count
         self._count = 0

@@ -35,6 +35,7 @@ from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
 from pfaff.integrate.output import output_kind, streamed
+from pfaff.integrate.loop import compiled_loop
 from pfaff.integrate.pace import Pace, state_bytes
 from pfaff.integrate.scale import DEFAULT_TOL, constraint_scale
 from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
@@ -483,13 +484,16 @@ def _simulate(
     run.events = AttitudeEvents(model.attitudes)
     run.user = user
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
+    run.loop, why = compiled_loop(run, model)  # (integrate/loop: where it applies)
     if kind == "nc":
         return streamed(run, model, output, cls.name, projector, project_output, (q0a, qd0a),
                         throw)  # fmt: skip
     status, message = run.go(q0a, qd0a)
     if status != "success" and throw:
         raise SimulationError(message)
-    stats = {**run.finish(), **projector.stats, "cpu_time": run.cpu}
+    stats = {"stepping": "python", **run.finish(), **projector.stats, "cpu_time": run.cpu}
+    if why:
+        stats["stepping_reason"] = why
     traj = _trajectory(model, cls.name, run, status, message, stats, projector, project_output)
     if kind == "csv":
         traj.to_csv(output)
@@ -542,6 +546,7 @@ class _Run:
         self._last_q: np.ndarray | None = None  # the state of the last event check
         self.pace = Pace(t1, None, None)  # the stall test and the step limit (set by simulate)
         self.sink = None  # the file the states go to as they are recorded (integrate/output)
+        self.loop = None  # the compiled loop, where it applies (set by simulate)
 
     def finish(self) -> dict:
         """The steppers' statistics, summed over restarts."""
@@ -647,6 +652,12 @@ class _Run:
                 self.pace.limit()
                 t_prev = st.t
                 try:
+                    moved = self.loop.advance(self, k, work) if self.loop else None
+                    if moved is not None:  # the compiled loop's steps, their states recorded
+                        k, work = moved
+                        if bar is not None:
+                            bar.update(st.t - t_prev)
+                        continue
                     st.step()
                     self.pace.step(t_prev, st.t)
                     roots, stop = user.find(st, t_prev) if user else ([], False)

@@ -82,6 +82,10 @@ class FusedKernel:
     checks : int
         How many pivot checks end the machine code's outputs (3, or 0 for machine code made
         before they were: :func:`pfaff.numeric.checkedsolve.passes` reads them).
+    loop : callable or None
+        ``loop(build=True) -> (con, power)``: the machine code the compiled stepping loop calls
+        besides ``llvm`` (:mod:`pfaff.derive.loopcode`), made on first call and cached like it;
+        None above ``FUSED_LIMIT``. It travels as ``llvm`` does (not pickled).
     """
 
     fn: Callable
@@ -102,6 +106,7 @@ class FusedKernel:
     pfn: Callable | None = None
     afn: Callable | None = None
     checks: int = 0
+    loop: Callable[..., tuple | None] | None = None
 
     def __getstate__(self) -> dict:
         """The generated functions travel as their source (:mod:`pfaff.numeric.generated`);
@@ -109,7 +114,7 @@ class FusedKernel:
         state = dict(self.__dict__)
         for key in _FUNCTIONS:
             state[key] = portable(state[key])
-        state["llvm"] = None
+        state["llvm"] = state["loop"] = None
         return state
 
     def __setstate__(self, state: dict) -> None:

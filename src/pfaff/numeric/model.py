@@ -35,6 +35,7 @@ from pfaff.numeric.field import AccelerationField, not_real
 from pfaff.numeric.general import DENSE_LIMIT, GeneralParts, fused_states
 from pfaff.numeric.kernelsolve import kernel_rhs
 from pfaff.numeric.kkt import FLOOR, STATE_FLOOR, KKTSystem, SingularKKT, SparseSolver, row_scales
+from pfaff.numeric.machineloop import LoopCode, machine_loop
 from pfaff.numeric.pattern import KKTPattern
 from pfaff.numeric.protocol import ConstraintLinearization
 from pfaff.numeric.redundant import independent_rows, min_norm_multipliers
@@ -325,6 +326,11 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
         if live is not None:
             return _live(make, live, fixed)
         return make(*self._p, *fixed)
+
+    def machine_loop(self, field: AccelerationField) -> tuple[LoopCode | None, str]:
+        """The machine code of the compiled stepping loop for a run on ``field`` (this run
+        copy's ODE function), or None and why not (:mod:`pfaff.numeric.machineloop`)."""
+        return machine_loop(self, field)
 
     def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
         """P(t, q, q̇) = Qᵀq̇ of the applied forces at the compiled parameter values, unchecked:
