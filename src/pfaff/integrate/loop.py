@@ -36,7 +36,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pfaff.integrate.integrators import UNREACHED, ProjectedRK
+from pfaff.integrate.integrators import ProjectedRK
+from pfaff.integrate.reach import UNREACHED
 from pfaff.integrate.stepper import _RunFailure
 
 if TYPE_CHECKING:
