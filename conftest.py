@@ -28,6 +28,17 @@ def pytest_configure(config: pytest.Config) -> None:
     config.stash[_HOME] = home
     config.stash[_MADE] = inherited is None
     os.environ["XDG_CACHE_HOME"] = home
+    if inherited is None:  # the main process, before xdist starts its workers
+        _prepare_stepping_loop()
+
+
+def _prepare_stepping_loop() -> None:
+    """Compile the compiled stepping loop (numba) once, here, into numba's on-disk cache, so
+    the workers load it instead of each compiling it at once on a cold machine (about 11 s of
+    CPU each). Without numba, or with ``PFAFF_LOOP=0``, nothing happens."""
+    from pfaff.integrate.loop import _kernel
+
+    _kernel()
 
 
 @pytest.hookimpl(optionalhook=True)

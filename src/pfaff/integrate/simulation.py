@@ -34,8 +34,8 @@ from pfaff.integrate.events import SINGULAR, AttitudeEvents, UserEvents
 from pfaff.integrate.ida import IDAStepper
 from pfaff.integrate.inputs import DrivenModel
 from pfaff.integrate.integrators import RK_METHODS, BaumgarteRK, ProjectedRK
-from pfaff.integrate.output import output_kind, streamed
 from pfaff.integrate.loop import compiled_loop
+from pfaff.integrate.output import output_kind, streamed
 from pfaff.integrate.pace import Pace, state_bytes
 from pfaff.integrate.scale import DEFAULT_TOL, constraint_scale
 from pfaff.integrate.stepper import Stepper, StepperOptions, _RunFailure
