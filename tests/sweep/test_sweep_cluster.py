@@ -126,7 +126,7 @@ def test_a_run_that_kills_its_worker_is_a_failed_run(pendulum):
 
             w._run = _run
 
-    cl = local_cluster(2, **{"distributed.scheduler.allowed-failures": 1})
+    cl = local_cluster(2, **{"distributed.scheduler.allowed-failures": 0})  # fewest deaths
     guard = threading.Timer(HUNG, cl.close)  # the sweep's wait then raises (FutureCancelledError)
     guard.start()
     try:
@@ -151,3 +151,26 @@ def test_a_compiled_model_on_a_cluster(cluster):
     ds = pfaff.sweep(model, vary, scheduler=cluster.scheduler_address, progress=False, **kw)
     assert (ref.status == "success").all()
     same_runs(ds, ref)
+
+
+def test_a_cluster_left_without_workers_fails_the_runs_it_has_not_finished(pendulum, monkeypatch):
+    """A scheduler with no worker at all (as when every nanny stopped restarting its worker):
+    after ``NO_WORKERS_SECONDS`` every run fails, naming why, instead of a wait that never ends."""
+    from distributed import Client
+
+    from pfaff.sweep import driver
+
+    monkeypatch.setattr(driver, "NO_WORKERS_SECONDS", 1.0)
+    monkeypatch.setattr(driver, "POLL_SECONDS", 0.2)
+    cl = local_cluster(0)
+    guard = threading.Timer(HUNG, cl.close)
+    guard.start()
+    try:
+        with Client(cl) as client:
+            ds = pfaff.sweep(pendulum, {"L": [0.5, 1.0, 1.5]}, t_end=0.5, scheduler=client,
+                             progress=False)  # fmt: skip
+    finally:
+        guard.cancel()
+        cl.close()
+    assert ds.status.values.tolist() == ["failed"] * 3
+    assert all("no worker for 1 s" in str(m) for m in ds.message.values)

@@ -41,6 +41,8 @@ TASKS_PER_WORKER = 4
 SAMPLES = 201
 SYNC = ("synchronous", "sync")
 ALONE_TRIES = 2  # a suspect run alone on the cluster: failed only if its workers die this often
+NO_WORKERS_SECONDS = 60.0  # a cluster left without workers this long: its unfinished runs fail
+POLL_SECONDS = 2.0  # how often a wait for a task looks whether the cluster still has workers
 CONNECT_SECONDS = 10.0  # a scheduler address must answer as Dask within this (then OptionError)
 
 
@@ -358,50 +360,101 @@ def _distributed(client: Any, spec: SweepSpec, results: Results, bar: Any) -> di
     """A probe task of two runs, then the rest in batches sized on its timing, results taken as
     they complete; then, each alone on the cluster, the runs of the batches that killed their
     workers more often than Dask allows (a run that still kills its worker is reported failed)."""
-    from distributed import as_completed
-
     n = spec.grid.size
     futures: dict[Any, list[int]] = {}
-    pending = as_completed(loop=client.loop)
     suspects: list[int] = []
 
     def submit(indices: list[int]) -> None:
-        f = client.submit(run_batch, spec, indices, pure=False)
-        futures[f] = indices
-        pending.add(f)
+        futures[client.submit(run_batch, spec, indices, pure=False)] = indices
 
     probe = list(range(min(2, n)))
     submit(probe)
     workers, batch = 1, 0
-    for fut in pending:
-        indices = futures.pop(fut)
-        out = _result(fut, client, futures)
-        if out is None:
-            suspects += indices
-        else:
-            bar.update(results.add(out))
-        if batch == 0:  # the probe is back: the rest in batches
-            workers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})))
-            seconds = float(out["seconds"][-1]) if out is not None else TASK_SECONDS
-            batch = batch_size(seconds, n - len(probe), workers)
-            for b in _chunks(range(len(probe), n), batch):
-                submit(b)
+    while futures:
+        try:
+            done = _first_done(client, futures)
+        except _NoWorkers as e:  # every unfinished run fails (never a wait forever)
+            unsent = [list(range(len(probe), n))] if batch == 0 and n > len(probe) else []
+            for rest in [*futures.values(), *([i] for i in suspects), *unsent]:
+                results.fail(rest, str(e))
+                bar.update(len(rest))
+            return {"scheduler": str(client.scheduler.address), "workers": 0, "batch": batch}
+        for fut in done:
+            indices = futures.pop(fut)
+            out = _result(fut, client, futures)
+            if out is None:
+                suspects += indices
+            else:
+                bar.update(results.add(out))
+            if batch == 0:  # the probe is back: the rest in batches
+                workers = max(1, len(client.scheduler_info(n_workers=-1).get("workers", {})))
+                seconds = float(out["seconds"][-1]) if out is not None else TASK_SECONDS
+                batch = batch_size(seconds, n - len(probe), workers)
+                for b in _chunks(range(len(probe), n), batch):
+                    submit(b)
     for i in suspects:  # alone: no other task dies with its worker
+        why = "its worker process died each time it ran (a crash of Python)"
         for _ in range(ALONE_TRIES):  # (a worker still restarting can take a good run down)
-            out = _result(client.submit(run_batch, spec, [i], pure=False), client, {})
+            fut = client.submit(run_batch, spec, [i], pure=False)
+            try:
+                _first_done(client, {fut: [i]})
+            except _NoWorkers as e:
+                out, why = None, str(e)
+                break
+            out = _result(fut, client, {})
             if out is not None:
                 break
         if out is None:
-            results.fail([i], "its worker process died each time it ran (a crash of Python)")
+            results.fail([i], why)
             bar.update(1)
         else:
             bar.update(results.add(out))
     return {"scheduler": str(client.scheduler.address), "workers": workers, "batch": batch}
 
 
+class _NoWorkers(Exception):
+    """The cluster has had no worker for :data:`NO_WORKERS_SECONDS` (its message says so)."""
+
+
+def _first_done(client: Any, futures: dict) -> set:
+    """The tasks of ``futures`` that have finished, once one has; :class:`_NoWorkers` (every
+    one cancelled) when the cluster has had no worker for :data:`NO_WORKERS_SECONDS` meanwhile
+    (nannies that stopped restarting theirs: a wait that would never end)."""
+    ready = threading.Event()
+    for fut in futures:  # (the callbacks run on the client's thread)
+        fut.add_done_callback(lambda _: ready.set())
+    alone_since = None
+    while True:
+        done = {fut for fut in futures if fut.done()}
+        if done:
+            return done
+        if ready.wait(POLL_SECONDS):
+            ready.clear()
+            continue
+        if _worker_count(client) != 0:
+            alone_since = None
+            continue
+        now = time.monotonic()
+        alone_since = now if alone_since is None else alone_since
+        if now - alone_since >= NO_WORKERS_SECONDS:
+            client.cancel(list(futures))
+            raise _NoWorkers(
+                f"the Dask cluster has had no worker for {NO_WORKERS_SECONDS:g} s (its worker "
+                "processes died and were not restarted): the run was not finished"
+            )
+
+
+def _worker_count(client: Any) -> int:
+    """How many workers the scheduler has now (-1 when it cannot say: then waiting goes on)."""
+    try:
+        return len(client.nthreads())
+    except Exception:  # a scheduler busy or going away: no verdict from this look
+        return -1
+
+
 def _result(fut: Any, client: Any, others: dict) -> dict[str, Any] | None:
-    """A task's output; None when its workers died (``KilledWorker``); other errors raised, the
-    ``others`` cancelled."""
+    """A finished task's output; None when its workers died (``KilledWorker``); other errors
+    raised, the ``others`` cancelled."""
     try:
         return fut.result()
     except Exception as e:
