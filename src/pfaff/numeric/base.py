@@ -25,7 +25,7 @@ from pfaff.numeric.pattern import KKTPattern, coo
 from pfaff.numeric.projection import ArrayLinearization
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.quantities import Quantities
-from pfaff.numeric.streams import add_product, scatter_add, take
+from pfaff.numeric.streams import add_product, fill_at, scatter_add, take
 from pfaff.numeric.value import ModelValue
 
 
@@ -131,12 +131,14 @@ class StreamModel(Quantities, ModelValue):
         self, t: float, q: np.ndarray, qd: np.ndarray, f: np.ndarray | None = None
     ) -> tuple[list, np.ndarray]:
         """Mass-entry values per block and the forcing vector Q - h (into ``f`` when given,
-        shape (n,): the run's buffer, no N-long array allocated)."""
+        shape (n,): the run's buffer, zero except where the blocks write, which are cleared)."""
         mvals = []
         if f is None:
             f = np.zeros(self.n)
         else:
-            f.fill(0.0)
+            for part in self.dyn:
+                for ix in part.forcing:
+                    fill_at(f, ix, 0.0)
         for part in self.dyn:
             outs = part.kernel(t, q, qd)
             nm = len(part.upper)
