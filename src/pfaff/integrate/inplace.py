@@ -87,6 +87,9 @@ class InPlaceDOP853(DOP853):
         self._stage = np.empty(n)  # the state of the stage being evaluated
         self._scale, self._err = np.empty(BLOCK), np.empty(2 * BLOCK)  # (the error norm's)
         self._E53 = np.array([self._E5, self._E3])  # both error estimates' rows, (2, ROWS)
+        # the rows the solution and the error estimates read: up to their last nonzero
+        # coefficient (K's last row, f(t + h, y_new), is not one of them: one row less read)
+        self._used = 1 + int(np.flatnonzero(np.abs(self._B) + np.abs(self._E53).sum(0))[-1])
         self.steps = 0  # accepted steps: an interpolant is valid until the next one
         self._extra: np.ndarray | None = None  # the dense output's three extra stages
         self.K_extended = None  # (SciPy's 16 rows: replaced by K and the dense output's own)
@@ -112,7 +115,8 @@ class InPlaceDOP853(DOP853):
             if power is not None and B[s] != 0.0:
                 terms.append(B[s] * power(ts, stage[:n], stage[n:]))
             self._rhs(ts, stage, K[ROW[s]])
-        np.dot(h * self._B, K, out=y_new)
+        u = self._used
+        np.dot(h * self._B[:u], K[:u], out=y_new)
         y_new += y
         self._rhs(t + h, y_new, K[ROW[-1]])
         return terms
@@ -147,7 +151,7 @@ class InPlaceDOP853(DOP853):
             np.maximum(s_, e_[0], out=s_)
             s_ *= rtol
             s_ += atol[i:j] if np.ndim(atol) else atol
-            np.dot(self._E53, K[:, i:j], out=e_)
+            np.dot(self._E53[:, : self._used], K[: self._used, i:j], out=e_)
             e_ /= s_
             n5 += float(np.dot(e_[0], e_[0]))
             n3 += float(np.dot(e_[1], e_[1]))
