@@ -1,10 +1,11 @@
-"""The in-place right-hand side of a family model keeps its forcing vector in a run buffer."""
+"""What a family run keeps of size N: the forcing vector in a run buffer, a band's head and tail."""
 
 from __future__ import annotations
 
 import numpy as np
 
 import pfaff
+from pfaff.numeric.banded import LowerBand
 from pfaff.numeric.streams import Index
 
 
@@ -30,3 +31,18 @@ def test_inplace_rhs_buffer_cleared_between_states() -> None:
     field.into(0.0, np.concatenate([q0, 0.0 * qd0]), out)  # uniform ring at rest
     xdd = (F / M + g * np.sin(a)) / 2  # ẍ = (F + M g sin α)/(2M) for a hoop rolling down
     np.testing.assert_allclose(out[model.n], xdd, rtol=1e-12)
+
+
+def test_constant_band_keeps_head_and_tail_only() -> None:
+    """A bandwidth-2 band with a head of 3 irregular rows and a constant tail (the lfilter
+    path): the solves agree with dense triangular solves, and of its m columns the band keeps
+    the head, the w after it and the tail's coefficients."""
+    m = 400
+    R = np.vstack([np.full(m, 2.0), np.full(m, -0.5), np.full(m, 0.25)])
+    R[:, :3] = [[1.5, -2.0, 3.0], [0.0, 0.7, -1.1], [0.0, 0.0, 0.4]]
+    L = np.diag(R[0]) + np.diag(R[1, 1:], -1) + np.diag(R[2, 2:], -2)
+    band = LowerBand(R, constant=True)
+    assert band.method == "lfilter" and band.R.shape[1] == band.head + band.w + 2 < m
+    c = np.random.default_rng(2).normal(size=m)
+    np.testing.assert_allclose(band.solve(c), np.linalg.solve(L, c), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(band.solve_t(c), np.linalg.solve(L.T, c), rtol=1e-10, atol=1e-12)
