@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import pfaff
 from pfaff.numeric.banded import LowerBand
@@ -33,6 +34,7 @@ def test_inplace_rhs_buffer_cleared_between_states() -> None:
     np.testing.assert_allclose(out[model.n], xdd, rtol=1e-12)
 
 
+@pytest.mark.slow  # (its first use of scipy.signal: 1.2 s of import)
 def test_constant_band_keeps_head_and_tail_only() -> None:
     """A bandwidth-2 band with a head of 3 irregular rows and a constant tail (the lfilter
     path): the solves agree with dense triangular solves, and of its m columns the band keeps
