@@ -28,7 +28,7 @@ from scipy.integrate import DOP853, DenseOutput
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # SciPy's step-size controller constants
 INPLACE_MIN = 4096  # state sizes (2n) from which the in-place path is taken
-BLOCK = 1 << 15  # components per block of the error norm (three 256 KiB buffers)
+BLOCK = 1 << 13  # components per block of the error norm (K's block stays in L2)
 INTERPOLATOR_POWER = 3 + DOP853.D.shape[0]  # the degree of DOP853's interpolant
 # The row of K each stage's derivative goes to. K_1 is read by stage 2 alone and K_2 by stages 3
 # and 4, and neither by the solution, the error estimate or the interpolant (their coefficients
@@ -85,7 +85,11 @@ class InPlaceDOP853(DOP853):
         self._A = np.array([_rows(self.A[s, :s]) for s in range(self.n_stages)])
         self._B, self._E5, self._E3 = _rows(self.B), _rows(self.E5), _rows(self.E3)
         self._stage = np.empty(n)  # the state of the stage being evaluated
-        self._scale, self._err = np.empty(BLOCK), np.empty(BLOCK)  # (the error norm's)
+        self._scale, self._err = np.empty(BLOCK), np.empty(2 * BLOCK)  # (the error norm's)
+        self._E53 = np.array([self._E5, self._E3])  # both error estimates' rows, (2, ROWS)
+        # the rows the solution and the error estimates read: up to their last nonzero
+        # coefficient (K's last row, f(t + h, y_new), is not one of them: one row less read)
+        self._used = 1 + int(np.flatnonzero(np.abs(self._B) + np.abs(self._E53).sum(0))[-1])
         self.steps = 0  # accepted steps: an interpolant is valid until the next one
         self._extra: np.ndarray | None = None  # the dense output's three extra stages
         self.K_extended = None  # (SciPy's 16 rows: replaced by K and the dense output's own)
@@ -111,7 +115,8 @@ class InPlaceDOP853(DOP853):
             if power is not None and B[s] != 0.0:
                 terms.append(B[s] * power(ts, stage[:n], stage[n:]))
             self._rhs(ts, stage, K[ROW[s]])
-        np.dot(h * self._B, K, out=y_new)
+        u = self._used
+        np.dot(h * self._B[:u], K[:u], out=y_new)
         y_new += y
         self._rhs(t + h, y_new, K[ROW[-1]])
         return terms
@@ -134,23 +139,22 @@ class InPlaceDOP853(DOP853):
 
     def _error_norm(self, y: np.ndarray, y_new: np.ndarray, h: float) -> float:
         """SciPy's DOP853 error norm, over blocks of :data:`BLOCK` components (the scale and
-        the two estimates of a block in cache-sized buffers: no array of the state's length)."""
+        the two estimates of a block in cache-sized buffers: no array of the state's length).
+        Both estimates come from one product with the block of K, which is read once."""
         K, sc, e = self.K, self._scale, self._err
         atol, rtol, n5, n3 = self.atol, self.rtol, 0.0, 0.0
         for i in range(0, self.n, BLOCK):
             j = min(i + BLOCK, self.n)
-            s_, e_ = sc[: j - i], e[: j - i]
+            s_, e_ = sc[: j - i], e[: 2 * (j - i)].reshape(2, j - i)  # (C-contiguous)
             np.abs(y[i:j], out=s_)
-            np.abs(y_new[i:j], out=e_)
-            np.maximum(s_, e_, out=s_)
+            np.abs(y_new[i:j], out=e_[0])
+            np.maximum(s_, e_[0], out=s_)
             s_ *= rtol
             s_ += atol[i:j] if np.ndim(atol) else atol
-            np.dot(self._E5, K[:, i:j], out=e_)
+            np.dot(self._E53[:, : self._used], K[: self._used, i:j], out=e_)
             e_ /= s_
-            n5 += float(np.dot(e_, e_))
-            np.dot(self._E3, K[:, i:j], out=e_)
-            e_ /= s_
-            n3 += float(np.dot(e_, e_))
+            n5 += float(np.dot(e_[0], e_[0]))
+            n3 += float(np.dot(e_[1], e_[1]))
         if n5 == 0 and n3 == 0:
             return 0.0
         return abs(h) * n5 / np.sqrt((n5 + 0.01 * n3) * self.n)

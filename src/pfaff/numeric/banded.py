@@ -61,6 +61,11 @@ class LowerBand:
         if self.head is not None:
             a = self.R[:, -1]
             self.method = "cumsum" if self.w == 1 and a[1] == -a[0] else "lfilter"
+            # the solves read the head's rows (and w after them) and the tail's coefficients,
+            # the same in every tail column: the columns between them are not kept (m long)
+            keep = self.head + self.w + 1
+            if keep < self.m:
+                self.R = np.concatenate([self.R[:, :keep], self.R[:, -1:]], axis=1)
 
     def check(self) -> None:
         """Raise ConstraintError when L is singular (a zero on its diagonal)."""

@@ -25,7 +25,7 @@ from pfaff.numeric.pattern import KKTPattern, coo
 from pfaff.numeric.projection import ArrayLinearization
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.quantities import Quantities
-from pfaff.numeric.streams import add_product, scatter_add, take
+from pfaff.numeric.streams import add_product, fill_at, scatter_add, take
 from pfaff.numeric.value import ModelValue
 
 
@@ -73,6 +73,7 @@ class StreamModel(Quantities, ModelValue):
         self.stats: dict = {"kkt_solves": 0}
         self._tmp: np.ndarray | None = None
         self._zero: np.ndarray | None = None
+        self._force: np.ndarray | None = None
         self._pattern: KKTPattern | None = None
         self._names = coordinate_names if isinstance(coordinate_names, list) else None
         self.inputs = list(inputs)  # declared inputs (System.add_input), by name
@@ -112,13 +113,13 @@ class StreamModel(Quantities, ModelValue):
 
     def _fresh_run_parts(self) -> None:
         d = self.__dict__
-        d["_tmp"], d["_zero"] = None, None  # scratch arrays: a run's own
+        d["_tmp"], d["_zero"], d["_force"] = None, None, None  # scratch arrays: a run's own
 
     def _unpickled(self) -> set[str]:
-        return super()._unpickled() | {"_tmp", "_zero", "_pattern"}
+        return super()._unpickled() | {"_tmp", "_zero", "_force", "_pattern"}
 
     def _restored(self) -> None:
-        for k in ("_tmp", "_zero", "_pattern"):
+        for k in ("_tmp", "_zero", "_force", "_pattern"):
             object.__setattr__(self, k, None)
 
     # ------------------------------------------------------------------ validation
@@ -126,9 +127,18 @@ class StreamModel(Quantities, ModelValue):
         return check_state(t, q, qd, self.n, self._names)
 
     # ------------------------------------------------------------------ raw evaluation
-    def _dynamics(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[list, np.ndarray]:
-        """Mass-entry values per block and the forcing vector Q - h."""
-        mvals, f = [], np.zeros(self.n)
+    def _dynamics(
+        self, t: float, q: np.ndarray, qd: np.ndarray, f: np.ndarray | None = None
+    ) -> tuple[list, np.ndarray]:
+        """Mass-entry values per block and the forcing vector Q - h (into ``f`` when given,
+        shape (n,): the run's buffer, zero except where the blocks write, which are cleared)."""
+        mvals = []
+        if f is None:
+            f = np.zeros(self.n)
+        else:
+            for part in self.dyn:
+                for ix in part.forcing:
+                    fill_at(f, ix, 0.0)
         for part in self.dyn:
             outs = part.kernel(t, q, qd)
             nm = len(part.upper)
@@ -273,7 +283,8 @@ class StreamModel(Quantities, ModelValue):
         out: np.ndarray | None = None,
         multipliers: bool = True,
     ) -> tuple[np.ndarray, np.ndarray | None]:
-        mvals, f = self._dynamics(t, q, qd)
+        # q̈ written in place (a run's right-hand side): the forcing vector in the run's buffer
+        mvals, f = self._dynamics(t, q, qd, None if out is None else self._forcing_buffer())
         avals, bias = self._accel_constraints(t, q, qd)
         view, solved_avals, solved_bias = self._solved_rows(avals, bias)
         zero = all(np.ndim(b) == 0 and b == 0 for b in solved_bias)
@@ -422,6 +433,12 @@ class StreamModel(Quantities, ModelValue):
     def check_determined(self, t: float, q: object, qd: object) -> None:
         """Validate the state (subclasses test more: :meth:`pfaff.NumericModel.check_determined`)."""
         self._state(t, q, qd)
+
+    def _forcing_buffer(self) -> np.ndarray:
+        """The forcing vector's buffer (n,) of the in-place solves, overwritten by each."""
+        if self._force is None:
+            object.__setattr__(self, "_force", np.zeros(self.n))
+        return self._force  # type: ignore[return-value]
 
     def _zeros(self) -> np.ndarray:
         if self._zero is None:

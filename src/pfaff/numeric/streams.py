@@ -152,6 +152,14 @@ def scatter_add(out: np.ndarray, ix: Index | np.ndarray, vals: np.ndarray | floa
         np.add.at(out, ix, np.broadcast_to(vals, ix.shape))
 
 
+def fill_at(out: np.ndarray, ix: Index | np.ndarray, value: float) -> None:
+    """out[ix] = value."""
+    if isinstance(ix, Index):
+        out[ix.start if ix.fixed else ix.slice()] = value
+    else:
+        out[ix] = value
+
+
 def indices(ix: Index | np.ndarray) -> np.ndarray:
     """An index set as an array."""
     return ix.indices() if isinstance(ix, Index) else ix

@@ -102,39 +102,40 @@ class TriangularSolver(KKTSolver):
     def __init__(self, model: StructuredModel, plan: TriangularPlan) -> None:
         self.model, self.plan = model, plan
         m, p = model.m, plan.p
-        self.R0 = np.zeros((plan.w + 1, m))
-        self.G0 = np.zeros((p, m))
+        R0, G0 = np.zeros((plan.w + 1, m)), np.zeros((p, m))  # the constant entries
         self.var_band, self.var_border = [], []
         for bi, ei, off, rows in plan.band:
             val = model.con[bi].acc.const[ei]
             if val is None:
                 self.var_band.append((bi, ei, off, rows))
             else:
-                scatter_add(self.R0[off], rows, val)
+                scatter_add(R0[off], rows, val)
         for bi, ei, g, rows in plan.border:
             val = model.con[bi].acc.const[ei]
             if val is None:
                 self.var_border.append((bi, ei, g, rows))
             else:
-                scatter_add(self.G0[g], rows, val)
+                scatter_add(G0[g], rows, val)
         self.f_local_zero = all(
             isinstance(ix, Index) and (ix.fixed or ix.count == 1) and ix.start < p
             for part in model.dyn
             for ix in part.forcing
         )
-        self._v = np.zeros(model.n)  # work vectors, touched now rather than in the first solve
-        self._MT = [np.zeros(model.n) for _ in range(p)]
-        for x in [self._v, *self._MT]:
-            x.fill(0.0)
-        self.band = None if self.var_band else LowerBand(self.R0, constant=True)
+        self._v = np.zeros(model.n)  # work vector, touched now rather than in the first solve
+        self._v.fill(0.0)
+        self._MT: list[np.ndarray] | None = None  # M T_g: made by the first solve that needs it
+        self.band = None if self.var_band else LowerBand(R0, constant=True)
         self.T: np.ndarray | None = None  # T = [I; -Z], rows (p, n), when constant
         self.C: np.ndarray | None = None  # M_const T, rows (p, n), when T is constant
         if self.band is not None:
             self.band.check()
             if not self.var_border:
-                self.T = self._t(self.band, self.G0)
+                self.T = self._t(self.band, G0)
                 self.C = self._const_mt(self.T)
                 self.TC = self.T @ self.C.T  # Tᵀ M_const T, (p, p)
+        # the constant parts, once the band and T hold them: N-long arrays no longer kept
+        self.R0: np.ndarray | None = None if self.band is not None else R0
+        self.G0: np.ndarray | None = None if self.T is not None else G0
 
     def _const_mt(self, T: np.ndarray) -> np.ndarray:
         """M_const T: the state-independent mass entries times T, rows (p, n)."""
@@ -162,12 +163,14 @@ class TriangularSolver(KKTSolver):
         """
         band, T = self.band, self.T
         if band is None:
+            assert self.R0 is not None
             R = self.R0.copy()
             for bi, ei, off, rows in self.var_band:
                 scatter_add(R[off], rows, avals[bi][ei])
             band = LowerBand(R, constant=False)
             band.check()
         if T is None:
+            assert self.G0 is not None
             G = self.G0.copy()
             for bi, ei, g, rows in self.var_border:
                 scatter_add(G[g], rows, avals[bi][ei])
@@ -260,6 +263,8 @@ class TriangularSolver(KKTSolver):
 
     def _mt(self, mvals: list, T: np.ndarray) -> list[np.ndarray]:
         """M T_g for every g (work buffers): M_const T from build time plus the varying part."""
+        if self._MT is None:
+            self._MT = [np.zeros(self.model.n) for _ in range(len(T))]
         model, MT = self.model, self._MT
         if self.C is None:
             for g in range(len(T)):
