@@ -484,7 +484,10 @@ def _simulate(
     run.events = AttitudeEvents(model.attitudes)
     run.user = user
     run.restart = lambda t, q, qd: cls(model, t, q, qd, t1, options, projector)
-    run.loop, why = compiled_loop(run, model)  # (integrate/loop: where it applies)
+    try:
+        run.loop, why = compiled_loop(run, model)  # (integrate/loop: where it applies)
+    except KeyboardInterrupt:  # while numba loaded: the run ends at once, "interrupted"
+        run.loop, why, run.interrupted_early = None, "interrupted while loading", True
     if kind == "nc":
         return streamed(run, model, output, cls.name, projector, project_output, (q0a, qd0a),
                         throw)  # fmt: skip
@@ -547,6 +550,7 @@ class _Run:
         self.pace = Pace(t1, None, None)  # the stall test and the step limit (set by simulate)
         self.sink = None  # the file the states go to as they are recorded (integrate/output)
         self.loop = None  # the compiled loop, where it applies (set by simulate)
+        self.interrupted_early = False  # Ctrl-C before the first step (the run ends there)
 
     def finish(self) -> dict:
         """The steppers' statistics, summed over restarts."""
@@ -645,6 +649,8 @@ class _Run:
         status, message = "success", "reached the end of the time span"
         work = 0.0  # of the applied forces, up to the start of the current step
         try:
+            if self.interrupted_early:
+                raise KeyboardInterrupt
             events, user = bool(self.events), self.user
             if user:
                 user.start(self.t0, q0, qd0)

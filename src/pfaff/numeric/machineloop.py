@@ -97,7 +97,7 @@ def machine_loop(model: NumericModel, field: AccelerationField) -> tuple[LoopCod
     >>> run = m.for_run()
     >>> code, why = machine_loop(run, run.ode_function(start=(0.0, np.array([1.0, 0.0]), np.zeros(2))))
     >>> code.mass.tolist(), code.acon.tolist(), code.rhs_size, why  # M diagonal, A = [2x, 2y]
-    ([[0, 0], [1, 1]], [[0, 0], [0, 1]], 14, '')
+    ([[0, 0], [1, 1]], [[0, 0], [0, 1]], 17, '')
     >>> machine_loop(run, run.ode_function(alpha=10.0, beta=10.0))[1]  # Baumgarte
     'the run stabilizes, rescales the floor, or has inputs'
     """
