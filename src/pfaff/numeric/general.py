@@ -179,6 +179,9 @@ class GeneralParts:
         ok = ok and np.allclose(out[k : k + v.size], v, rtol=1e-11, atol=1e-13)
         if not fk.solves:
             return "" if ok else "it disagrees with the generated Python code at a test state"
+        if not np.isfinite(out[n:k]).all():  # M not positive definite at the test state (a
+            # quaternion's M is singular): the machine code's documented "take rfn"
+            return "" if ok else "it disagrees with the generated Python code at a test state"
         K = np.zeros((n + m, n + m))
         K.flat[fk.kkt_index] = v[fk.kkt_source]
         if independent_rows(K[n:, :n]) is None:  # (redundant rows: λ is not unique, q̈ floored)
