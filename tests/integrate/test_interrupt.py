@@ -72,6 +72,13 @@ LONG_RUN = textwrap.dedent(
 )
 
 
+def _default_sigint() -> None:
+    """In the child, SIGINT as a terminal gives it: pytest-xdist's workers ignore SIGINT, a
+    child inherits that, and Python then installs no KeyboardInterrupt handler (the run would go
+    on, signalled or not)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.slow  # (three seconds of stepping, by design)
 def test_the_long_pendulum_run_sent_sigint_after_3_s_returns_its_points() -> None:
     """pfaff.simulate over (0, 1e7) in a subprocess, SIGINT 3 s into the run: the call returns a
@@ -79,7 +86,7 @@ def test_the_long_pendulum_run_sent_sigint_after_3_s_returns_its_points() -> Non
     env = {**os.environ, "PYTHONPATH": str(Path(pfaff.__file__).parents[1])}
     proc = subprocess.Popen(
         [sys.executable, "-c", LONG_RUN], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        env=env, text=True,
+        env=env, text=True, preexec_fn=_default_sigint,
     )  # fmt: skip
     assert proc.stdout.readline().strip() == "simulating"  # imported and compiled
     time.sleep(3.0)  # (what is tested is what 3 s into the run gives, not a duration)
