@@ -83,6 +83,56 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         raise
 
 
+def read_capped(
+    path: Path, max_bytes: int, what: str, error: type[Exception], hint: str = ""
+) -> str:
+    """The UTF-8 text of the regular file ``path``, at most ``max_bytes`` long, else ``error``.
+
+    The size is checked before the file is read and again on what is read (a file that grows
+    in between), a leading byte-order mark is dropped, and every failure names ``what``.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    max_bytes : int
+        The cap on its size.
+    what : str
+        The file as messages name it, e.g. ``"the URDF file x.urdf"``.
+    error : type
+        The exception raised on any failure.
+    hint : str
+        Appended to the message of a file over the cap (how to raise it).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "a.txt"
+    >>> _ = p.write_bytes("\ufeffhello".encode())
+    >>> read_capped(p, 100, f"file {p.name}", ValueError)
+    'hello'
+    >>> read_capped(p, 3, f"file {p.name}", ValueError)
+    Traceback (most recent call last):
+    ValueError: file a.txt: 8 bytes, above the cap of 3
+    """
+    try:
+        size = path.stat().st_size
+        if not path.is_file():
+            raise error(f"{what}: not a regular file")
+        if size > max_bytes:
+            raise error(f"{what}: {size} bytes, above the cap of {max_bytes}{hint}")
+        with path.open("rb") as fh:
+            raw = fh.read(max_bytes + 1)
+    except OSError as e:
+        raise error(f"{what}: cannot be read ({e.strerror or e})") from None
+    if len(raw) > max_bytes:
+        raise error(f"{what}: larger than the cap of {max_bytes} bytes{hint}")
+    try:
+        return raw.decode("utf-8").removeprefix("\ufeff")  # a byte-order mark some editors write
+    except UnicodeDecodeError as e:
+        raise error(f"{what}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+
+
 def special_kind(target: Path) -> str | None:
     """What an existing target that is not a regular file is (a device, a pipe...), else None."""
     try:

@@ -19,6 +19,7 @@ from sympy.core.function import AppliedUndef
 from pfaff.core.errors import ConstraintError, ModelError, ModelTypeError
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.lazy import LazySeq, NumberedNames, concat
+from pfaff.core.reals import real_number
 from pfaff.core.symbols import (
     as_expr,
     is_coordinate_like,
@@ -255,15 +256,7 @@ class SystemSpec(ElementsMixin, EventsMixin, ContactsMixin, ShapesMixin):
                     f"`values`: {str(key)[:80]!r} is not a parameter of this system "
                     f"(its parameters: {', '.join(sorted(names)) or 'none'})"
                 )
-            if isinstance(value, bool | str | bytes) or not isinstance(
-                value, int | float | np.number
-            ):
-                raise ModelError(f"`values[{name!r}]` must be a real number; got {value!r:.80}")
-            if not np.isfinite(value) or isinstance(value, np.complexfloating):
-                raise ModelError(
-                    f"`values[{name!r}]` must be a finite real number; got {value!r:.80}"
-                )
-            checked[name] = float(value)
+            checked[name] = real_number(value, f"values[{name!r}]", ModelError)
         self._defaults.update(checked)
 
     @property

@@ -71,7 +71,7 @@ import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError, ModelWarning, ParameterError
-from pfaff.core.files import file_path
+from pfaff.core.files import file_path, read_capped
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.safe_expr import (
     ExpressionError,
@@ -213,26 +213,11 @@ def load_model(path: str | os.PathLike, *, max_bytes: int = MAX_BYTES) -> ModelF
 
 def _read(p: Path, max_bytes: int) -> dict:
     where = f"file {p}"
-    try:
-        size = p.stat().st_size
-        if not p.is_file():
-            raise ModelFileError(f"{where}: not a regular file")
-        if size > max_bytes:
-            raise ModelFileError(
-                f"{where}: {size} bytes, above the cap of {max_bytes} (pass a larger `max_bytes`"
-                " to load_model, or --max-bytes, if the file is meant to be this large)"
-            )
-        with p.open("rb") as fh:
-            raw = fh.read(max_bytes + 1)
-    except OSError as e:
-        raise ModelFileError(f"{where}: cannot be read ({e.strerror or e})") from None
-    if len(raw) > max_bytes:
-        raise ModelFileError(f"{where}: larger than the cap of {max_bytes} bytes")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as e:
-        raise ModelFileError(f"{where}: not UTF-8 text (byte {e.start})") from None
-    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark (some editors write one)
+    hint = (
+        " (pass a larger `max_bytes` to load_model, or --max-bytes, if the file is meant to be"
+        " this large)"
+    )
+    text = read_capped(p, max_bytes, where, ModelFileError, hint)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:

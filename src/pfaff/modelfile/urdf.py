@@ -39,7 +39,7 @@ import sympy as sp
 
 from pfaff.api.system import System
 from pfaff.core.errors import ModelError
-from pfaff.core.files import file_path
+from pfaff.core.files import file_path, read_capped
 from pfaff.core.keywords import checked_keywords
 from pfaff.core.stack import outside_pfaff
 from pfaff.core.symbols import coordinates as make_coordinates
@@ -181,17 +181,7 @@ def _stops(system: System, restitution: float) -> None:
 def _read(path: str | os.PathLike) -> str:
     """The file's text, its size capped and DOCTYPE/ENTITY declarations refused."""
     p = file_path(path)
-    try:
-        with p.open("rb") as f:
-            raw = f.read(MAX_BYTES + 1)
-    except OSError as e:
-        raise ModelError(f"cannot read URDF file {p}: {e.strerror or e}") from e
-    if len(raw) > MAX_BYTES:
-        raise ModelError(f"{p}: the URDF file is larger than {MAX_BYTES} bytes; refused")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise ModelError(f"{p}: the URDF file is not UTF-8 ({e.reason} at byte {e.start})") from e
+    text = read_capped(p, MAX_BYTES, f"the URDF file {p}", ModelError)
     upper = text.upper()
     for decl in ("<!DOCTYPE", "<!ENTITY"):
         if decl in upper:

@@ -14,33 +14,13 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.sparse as sps
 
-from pfaff.core.errors import ModelTypeError, OptionError, PfaffError, StateError
+from pfaff.core.errors import ModelTypeError, OptionError, StateError
+from pfaff.core.reals import real_number
 from pfaff.numeric.protocol import DynamicsModel
 
+__all__ = ["real_number"]  # re-exported: the numeric stage's entry checks use it
+
 SHORT = 64  # entries up to which a vector's finiteness is tested on a Python list
-
-
-def real_number(value: object, arg: str, error: type[PfaffError] = StateError) -> float:
-    """``value`` as a finite real float, else ``error`` (a :class:`StateError` by default)
-    naming ``arg``.
-
-    Strings, booleans, complex numbers and arrays of more than one number are refused, not
-    converted (``float("1")``, ``float(True)`` and NumPy's complex-to-real cast would pass them).
-    """
-    if isinstance(value, float) or type(value) is int:  # the common case (np.float64 too)
-        v = float(value)
-    else:
-        if isinstance(value, str | bytes | bool | np.bool_) or np.ndim(value) != 0:
-            raise error(f"`{arg}` must be a real number; got {value!r:.80}")
-        if np.iscomplexobj(value) or isinstance(value, complex):
-            raise error(f"`{arg}` must be a real number; got the complex value {value!r:.80}")
-        try:
-            v = float(value)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            raise error(f"`{arg}` must be a real number; got {value!r:.80}") from None
-    if not math.isfinite(v):
-        raise error(f"`{arg}` is not finite ({v})")
-    return v
 
 
 def real_vector(value: object, arg: str, n: int, names: Sequence[str] | None = None) -> np.ndarray:
