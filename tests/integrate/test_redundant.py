@@ -14,6 +14,7 @@ from test_simulate_fourbar import GRAVITY_TORQUE, INERTIA, four_bar
 from test_simulate_fourbar import P as FOURBAR
 
 import pfaff
+import systems
 from methods import ALL_METHODS
 
 M, R, F = 1.0, 0.5, 2.0
@@ -162,16 +163,7 @@ def test_a_run_with_inputs_reports_the_minimum_norm_multipliers() -> None:
     """Inputs report states in one batched pass, except where the run's rows are redundant:
     there λ is the minimum-norm one, as without inputs. Along x = y under the push u the rows
     a = x − y, b = 2x − 2y carry λ_a + 2λ_b = −u/2, so λ = (−u/10, −u/5)."""
-    import sympy as sp
-
-    x, y = pfaff.coordinates("x y")
-    u = sp.Symbol("u")
-    s = pfaff.System([x, y])
-    s.add_particle(1, [x, y])
-    s.add_force([u, 0], at=[x, y])
-    s.add_input(u)
-    s.add_holonomic_constraint(x - y, name="a")
-    s.add_holonomic_constraint(2 * x - 2 * y, name="b")
+    s = systems.driven_particle("a", "b")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pfaff.RedundancyWarning)
         model = s.equations().compile({})

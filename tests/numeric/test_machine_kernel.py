@@ -14,6 +14,7 @@ import pytest
 import sympy as sp
 
 import pfaff
+import systems
 from pfaff.derive import fused
 from pfaff.numeric.evaluator import MACHINE_LIMIT, OPTIMIZED_LIMIT, machine_opt_level
 
@@ -163,14 +164,7 @@ def test_a_zero_push_does_no_work_and_a_push_does() -> None:
 def test_kernel_machine_code_reads_a_runs_inputs() -> None:
     """A particle on the line y = x pushed along x by an input u(t) = 4 + t: ẍ = ÿ = u/2, so
     x(1) = (4/2 + 1/6)/2 from rest (the machine-code kernel reads the run's parameter vector)."""
-    x, y = pfaff.coordinates("x y")
-    u = sp.Symbol("u")
-    s = pfaff.System([x, y])
-    s.add_particle(1, [x, y])
-    s.add_force([u, 0], at=[x, y])
-    s.add_input(u)
-    s.add_holonomic_constraint(y - x)
-    model = s.equations().compile({}, evaluator="machine")
+    model = systems.driven_particle().equations().compile({}, evaluator="machine")
     assert model.compile_machine_code() and model.timings["machine_kind"] == "kernel+LAPACK"
     run = pfaff.simulate(model, [0, 0], [0, 0], (0, 1), inputs={"u": lambda t: 4.0 + t})
     assert run.status == "success"

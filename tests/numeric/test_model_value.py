@@ -12,6 +12,7 @@ import pytest
 import sympy as sp
 
 import pfaff
+import systems
 from methods import ALL_METHODS
 from pfaff.errors import ModelTypeError, OptionError, ParameterError
 from pfaff.numeric.evaluator import MACHINE_FROM
@@ -27,14 +28,7 @@ sys.stdout.buffer.write(pickle.dumps((qdd, lam, model.timings["evaluator"])))
 
 def driven_particle() -> pfaff.NumericModel:
     """The issue's case: a particle pushed along x by an input u, held on the line y = x."""
-    x, y = pfaff.coordinates("x y")
-    u = sp.Symbol("u")
-    s = pfaff.System([x, y])
-    s.add_particle(1, [x, y])
-    s.add_force([u, 0], at=[x, y])
-    s.add_input(u)
-    s.add_holonomic_constraint(y - x)
-    return s.equations().compile({})
+    return systems.driven_particle().equations().compile({})
 
 
 def chain(k: int) -> pfaff.System:
