@@ -7,13 +7,19 @@ calls the machine-code kernel's LLVM functions through their C entry points
 outputs, and solves M q̈ = Q − h by the Cholesky factorization M = UᵀU in compiled loops: no
 return to Python between the kernel, the factorization and the two triangular solves.
 
-Why not LAPACK: at these sizes a call of SciPy's ``dppsv`` is the factorization's level-2 BLAS
-calls, one per column, plus the wrapper's argument checks; the loops here, their indices
-unsigned so that LLVM vectorizes the row updates, factor and solve a dense SPD matrix of
-33 unknowns in 8.1 µs against 12.4 µs for ``dppsv`` (65 unknowns: 35 against 46 µs; each with
-the copy of its input, CPU medians on this project's busy machine, interleaved). Same algorithm
-as LAPACK's unblocked ``dpotf2`` (right-looking, the pivot's reciprocal scaling its row): the
-results agree to rounding.
+Why not LAPACK: at these sizes SciPy's ``dppsv`` is the factorization's level-2 BLAS calls, one
+per column, behind the wrapper's argument checks; the loops here, their indices unsigned so
+that LLVM vectorizes the row updates, write M from the outputs, factor and solve it in 5.6 µs
+at 33 unknowns against 7.6 µs for ``dppsv`` on the packed outputs (49: 11.5 against 14.7 µs;
+65: 21.7 against 25.5 µs; CPU medians, interleaved, on this project's machine at load 7). The
+whole right-hand side of the 32-link chain on a cart went from 19.4–29.6 to 14.3–15.4 µs
+(``benchmarks/engines.py``, two runs each at load 7: about 1.0× Pinocchio's ``aba`` instead of
+1.3–1.65×), below the 31-link chain's fused machine code (18.8 µs timed together: the step at
+the fused limit is ×0.73 instead of ×1.08). The algorithm is LAPACK's unblocked ``dpotf2``
+(right-looking, the pivot's reciprocal scaling its row), in IEEE arithmetic (no fast-math):
+the results agree with the LAPACK path to rounding. The price is numba's import and start,
+once per process (about 0.35 s CPU; the function itself loads from numba's cache in 8 ms,
+and compiles in about 1.5 s the first time on a machine).
 
 The plan (``int64``) is [n, parts, entries, outputs, (address, data, offset) per LLVM function,
 the flat index i·n + j (i ≤ j) of each M entry in output order]; the work array (float64) is

@@ -5,11 +5,13 @@ Above ``FUSED_LIMIT`` unknowns the machine code is the fused kernel alone
 matrix from its outputs and solves it by the range-space method with the floor
 (:func:`pfaff.numeric.kkt.solve_floored`, the algorithm of the model's ``range-space`` solver),
 without the assembly of :meth:`pfaff.NumericModel._kkt` (a new matrix per call, the velocity
-residual); without constraints, M q̈ = Q − h by one in-place Cholesky solve on the kernel's
-outputs (``dppsv`` in packed storage, or ``dposv``). The kernel is called through its
-unchecked entry point into a preallocated array (:func:`pfaff.numeric.evaluator.preallocated`).
-On the 32-link chain on a cart (33 unknowns) this right-hand side costs about 1.3–1.6× Pinocchio's
-``aba`` (``benchmarks/engines.py``).
+residual). Without constraints, M q̈ = Q − h is one compiled call where numba is installed
+(:mod:`pfaff.numeric.kernelchol`: the kernel's LLVM functions through their C entry points and
+the Cholesky solve in compiled loops; the 32-link chain on a cart, 33 unknowns, about 1.0×
+Pinocchio's ``aba``, ``benchmarks/engines.py``), else one in-place Cholesky solve on the kernel's
+outputs by SciPy's LAPACK (``dppsv`` in packed storage, or ``dposv``; about 1.3–1.6× ``aba``),
+the kernel called through its unchecked entry point into a preallocated array
+(:func:`pfaff.numeric.evaluator.preallocated`).
 """
 
 from __future__ import annotations
