@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import symengine as se
+import sympy as sp
 
 import pfaff
 from pfaff.derive import fused
@@ -85,3 +86,19 @@ def test_a_models_compiled_rhs_matches_the_lapack_path(monkeypatch: pytest.Monke
     monkeypatch.setattr(kernelsolve, "_compiled_rhs", lambda *args: None)
     want = model.ode_function().on_lists(0.3, y.tolist())
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13)
+
+
+@pytest.mark.usefixtures("low_limit")
+def test_the_compiled_rhs_reads_a_runs_inputs() -> None:
+    """A free particle in space pushed along x by an input u(t) = 4 + t: ẍ = u/2 for a mass of 2,
+    so x(1) = (4/2 + 1/6)/2 from rest (the compiled call reads the run's parameter vector)."""
+    x, y, z = pfaff.coordinates("x y z")
+    u = sp.Symbol("u")
+    s = pfaff.System([x, y, z])
+    s.add_particle(2, [x, y, z])
+    s.add_force([u, 0, 0], at=[x, y, z])
+    s.add_input(u)
+    model = s.equations().compile({}, evaluator="machine")
+    run = pfaff.simulate(model, [0, 0, 0], [0, 0, 0], (0, 1), inputs={"u": lambda t: 4.0 + t})
+    assert run.status == "success" and "compiled_solve" in model.timings
+    np.testing.assert_allclose(run.q[-1], [(2.0 + 1.0 / 6.0) / 2, 0.0, 0.0], rtol=1e-8, atol=1e-12)
