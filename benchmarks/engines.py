@@ -22,8 +22,12 @@ fused kernel, else the array call), warm (compiled, machine code built or loaded
 calls each) and the table gives the medians over the rounds and the ratios. Above the fused limit
 (n + m > 32) the row ``pfaff python`` is the model with the generated Python kernel
 (``evaluator="python"``): the path every such model took before issue 25, measured in the same
-run as the baseline of "no cliff". Compile times are CPU seconds from ``model.timings``
-(``codegen``, ``machine_code``; a second run loads both from the on-disk cache).
+run as the baseline of "no cliff". Consecutive sizes (31 and 32 links) are timed once more in
+the same rounds and the step between them printed under the table (the rows are timed one
+after the other, and the machine's load changes between them). Compile times are CPU seconds
+from ``model.timings`` (``codegen``, ``machine_code``; a second run loads both from the on-disk
+cache); ``compiled_solve`` s is numba's load of the compiled right-hand side above the fused
+limit (once per process; compiled once per machine and kept in numba's cache).
 
 Targets (issue 25): pfaff ≤ 1.5× ``aba`` for chains of 2 to 16 links and the 6R arm; ≤ 3× ``aba``
 and ≤ 2× ``mj_forward`` at 32 and 64 links; no step above 1.5× between consecutive sizes.
@@ -268,6 +272,8 @@ def _machine(timings: dict) -> str:
     kind = str(timings.get("machine_kind", ""))
     if "machine_functions" in timings:
         kind += f", O{timings.get('machine_opt_level')} × {timings['machine_functions']}"
+    if "compiled_solve" in timings:  # the unconstrained solve: numba's loops, not LAPACK
+        kind += ", solved in numba"
     return kind
 
 
@@ -285,12 +291,15 @@ def main(argv: list[str] | None = None) -> None:
           f"{os.cpu_count()} cores; BLAS threads {os.environ['OPENBLAS_NUM_THREADS']}")  # fmt: skip
     print(
         "| system | n+m | pfaff µs | aba µs | mj_forward µs | ×aba | ×mj | pfaff python µs "
-        "(before) | before/now | evaluator | codegen s | machine s |"
+        "(before) | before/now | evaluator | codegen s | machine s | compiled_solve s |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    rows: dict[int, Row] = {}
     for name, k in systems:
         big = k is not None and k + 1 > 32
         row = Row(name, k, ("rule", "python") if big else ("rule",))
+        if k is not None and (k - 1 in args.links or k + 1 in args.links):
+            rows[k] = row
         model = row.models["rule"][0]
         calls = args.calls or max(20, int(20000 / (model.n + model.m) ** 1.5))
         t = timed(row.callables(), args.rounds, calls)
@@ -304,8 +313,23 @@ def main(argv: list[str] | None = None) -> None:
             "" if before is None else f"{before / now:.1f}",
             f"{model.evaluator} ({_machine(timings)})",
             f"{timings.get('codegen', 0.0):.2f}", f"{timings.get('machine_code', 0.0):.2f}",
+            f"{timings['compiled_solve']:.2f}" if "compiled_solve" in timings else "",
         ]  # fmt: skip
         print("| " + " | ".join(cells) + " |", flush=True)
+    for k in sorted(rows):
+        if k + 1 in rows:
+            print(step(rows[k], rows[k + 1], args.rounds), flush=True)
+
+
+def step(small: Row, large: Row, rounds: int) -> str:
+    """The step between consecutive sizes, their right-hand sides timed in the same rounds
+    (the rows of the table are timed one after the other, and the load changes between them)."""
+    a, b = small.callables()["pfaff rule"], large.callables()["pfaff rule"]
+    t = timed({"small": a, "large": b}, rounds, max(20, int(20000 / (large.k + 1) ** 1.5)))
+    return (
+        f"step cart {small.k} -> cart {large.k} (timed together): {t['small']:.1f} -> "
+        f"{t['large']:.1f} µs, ×{t['large'] / t['small']:.2f}"
+    )
 
 
 if __name__ == "__main__":

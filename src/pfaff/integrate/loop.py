@@ -29,17 +29,14 @@ CPU seconds the loop's code took to load or compile in this process.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import signal
-import threading
 import time
-from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pfaff.core.held import signals_held
 from pfaff.integrate.integrators import ProjectedRK
 from pfaff.integrate.reach import UNREACHED
 from pfaff.integrate.stepper import _RunFailure
@@ -56,7 +53,7 @@ def _kernel() -> tuple[Any, str]:
         return None, "PFAFF_LOOP=0"
     if not _KERNEL:
         start = time.process_time()
-        with _signals_held():
+        with signals_held():
             try:
                 from pfaff.integrate import loopkernel
 
@@ -69,27 +66,6 @@ def _kernel() -> tuple[Any, str]:
             _KERNEL.append(time.process_time() - start)
     kernel = _KERNEL[0]
     return (None, kernel) if isinstance(kernel, str) else (kernel, "")
-
-
-@contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """SIGINT and SIGTERM held while numba is imported and its cache loaded, then delivered
-    to the handlers they had: a Ctrl-C there could be lost inside numba, and the run would go on
-    (seen under load: a long run that Ctrl-C did not end). Outside the main thread, nothing is
-    held (signals are the main thread's)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    held = (signal.SIGINT, signal.SIGTERM)
-    old = {s: signal.signal(s, lambda signum, _frame: caught.append(signum)) for s in held}
-    try:
-        yield
-    finally:
-        for s, handler in old.items():
-            signal.signal(s, handler)
-        for s in dict.fromkeys(caught):
-            signal.raise_signal(s)
 
 
 CHUNK = 4096  # steps per call at most: between calls the driver sees Ctrl-C and max_seconds

@@ -1,47 +1,14 @@
 """Integrate stage: what the compiled loop's numba code is built on (imported with it).
 
-``cached`` and ``helper`` (numba's compilation of the loop and of its helpers), ``call_entry``
-(a call through a C entry point ``void *f(double *out, const double *in, void *data)``,
-SymEngine's LLVM functions': :mod:`pfaff.numeric.machineloop`) and ``copy_into``.
+``cached``, ``helper`` and ``call_entry`` (:mod:`pfaff.numeric.numbacode`: numba's compilation
+of the loop and of its helpers, a call through SymEngine's C entry points) and ``copy_into``.
 """
 
 from __future__ import annotations
 
-from llvmlite import ir
-from numba import njit, types
-from numba.extending import intrinsic
+from pfaff.numeric.numbacode import cached, call_entry, helper
 
-
-def helper(fn):
-    """A helper of :func:`advance`: compiled with it (and kept in its cache entry)."""
-    return njit(error_model="numpy")(fn)
-
-
-def cached(fn):
-    """``njit`` with numba's on-disk cache (beside this file, or numba's user-wide folder when
-    that is read-only, or ``NUMBA_CACHE_DIR``); without it where no folder is writable."""
-    try:
-        return njit(cache=True, error_model="numpy")(fn)
-    except RuntimeError:  # "no locator available": compiled once per process instead
-        return njit(error_model="numpy")(fn)
-
-
-@intrinsic
-def call_entry(typingctx, addr, out, inp, data):
-    """Call ``void *f(double *out, const double *in, void *data)`` at the address ``addr``."""
-    sig = types.void(types.int64, out, inp, types.int64)
-
-    def codegen(context, builder, signature, args):
-        a, o, i, d = args
-        dptr, vptr = ir.DoubleType().as_pointer(), ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(vptr, [dptr, dptr, vptr])
-        fptr = builder.inttoptr(a, fnty.as_pointer())
-        oarr = context.make_array(signature.args[1])(context, builder, o)
-        iarr = context.make_array(signature.args[2])(context, builder, i)
-        builder.call(fptr, [oarr.data, iarr.data, builder.inttoptr(d, vptr)])
-        return context.get_dummy_value()
-
-    return sig, codegen
+__all__ = ["cached", "call_entry", "copy_into", "helper"]
 
 
 @helper

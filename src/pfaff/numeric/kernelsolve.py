@@ -5,28 +5,35 @@ Above ``FUSED_LIMIT`` unknowns the machine code is the fused kernel alone
 matrix from its outputs and solves it by the range-space method with the floor
 (:func:`pfaff.numeric.kkt.solve_floored`, the algorithm of the model's ``range-space`` solver),
 without the assembly of :meth:`pfaff.NumericModel._kkt` (a new matrix per call, the velocity
-residual); without constraints, M q̈ = Q − h by one in-place Cholesky solve on the kernel's
-outputs (``dppsv`` in packed storage, or ``dposv``). The kernel is called through its
-unchecked entry point into a preallocated array (:func:`pfaff.numeric.evaluator.preallocated`).
-On the 32-link chain on a cart (33 unknowns) this right-hand side costs about 1.3–1.6× Pinocchio's
-``aba`` (``benchmarks/engines.py``).
+residual). Without constraints, M q̈ = Q − h is one compiled call where numba is installed
+(:mod:`pfaff.numeric.kernelchol`: the kernel's LLVM functions through their C entry points and
+the Cholesky solve in compiled loops; the 32-link chain on a cart, 33 unknowns, about 1.0×
+Pinocchio's ``aba``, ``benchmarks/engines.py``), else one in-place Cholesky solve on the kernel's
+outputs by SciPy's LAPACK (``dppsv`` in packed storage, or ``dposv``; about 1.3–1.6× ``aba``),
+the kernel called through its unchecked entry point into a preallocated array
+(:func:`pfaff.numeric.evaluator.preallocated`).
 """
 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
 
+from pfaff.core.held import signals_held
 from pfaff.numeric.evaluator import preallocated
 from pfaff.numeric.kkt import solve_floored
+from pfaff.numeric.machineloop import entry_point
 
 _posv = scipy.linalg.lapack.dposv
 _ppsv = scipy.linalg.lapack.dppsv
 PACKED_LIMIT = 48  # n up to which a dense M is solved in packed storage (``dppsv``)
+_SOLVER: list = []  # kernelchol (or None) and the CPU seconds of its load: once per process
 
 if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
@@ -94,6 +101,9 @@ def kernel_rhs(
         return call()
 
     if not m:
+        compiled_call = _compiled_rhs(fk, compiled, n, buf, live, slow, stats)
+        if compiled_call is not None:
+            return compiled_call
         return _cholesky_rhs(fk, load, n, slow, stats)
     K = np.zeros((N, N))
     flat = K.reshape(-1)  # a view: the pattern's entries are refilled, the rest stays zero
@@ -119,6 +129,75 @@ def kernel_rhs(
         return out if isfinite(sum(qdd)) else slow(t, yl)
 
     return rhs
+
+
+def _compiled_rhs(
+    fk: FusedKernel,
+    compiled: Callable,
+    n: int,
+    buf: np.ndarray,
+    live: list | None,
+    slow: Callable[[float, list], list],
+    stats: dict,
+) -> Callable[[float, list], list] | None:
+    """:func:`kernel_rhs` without constraints as one compiled call
+    (:func:`pfaff.numeric.kernelchol.kernel_cholesky`: the kernel's LLVM functions through
+    their C entry points, then the Cholesky solve in compiled loops); the array path where M is
+    not positive definite or q̈ is not finite. None where numba is not installed or ``compiled``
+    has no C entry points (then :func:`_cholesky_rhs`)."""
+    functions = _entry_points(compiled)
+    module = compiled_solver()[0] if functions is not None else None
+    if module is None or functions is None:
+        return None
+    kernel_cholesky = module.kernel_cholesky
+    plan, work = module.plan_of(functions, fk.entry_index, n, int(compiled.offsets[-1]))
+    done = work[work.size - 2 * n :]
+    p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+
+    def rhs(t: float, yl: list) -> list:
+        buf[0] = t
+        buf[1 : 1 + 2 * n] = yl
+        if live is not None:
+            buf[p0:p1] = live
+        if kernel_cholesky(plan, buf, work) == 0:
+            stats["kkt_solves"] += 1
+            return done.tolist()
+        return slow(t, yl)
+
+    rhs.keep = compiled  # type: ignore[attr-defined]  # its entry points are in ``plan``
+    rhs.compiled_solve = compiled_solver()[1]  # type: ignore[attr-defined]
+    return rhs
+
+
+def compiled_solver() -> tuple[ModuleType | None, float]:
+    """:mod:`pfaff.numeric.kernelchol` with its function compiled or loaded from numba's cache
+    (once per process), or None where numba is missing or fails (the model then solves with
+    SciPy's LAPACK wrappers); and the CPU seconds that took (``timings["compiled_solve"]``)."""
+    if not _SOLVER:
+        start = time.process_time()
+        with signals_held():  # numba could swallow a Ctrl-C
+            try:
+                from pfaff.numeric import kernelchol
+
+                kernelchol.warm()
+                _SOLVER.append(kernelchol)
+            except Exception:  # ImportError (no numba) or numba's own: the LAPACK path
+                _SOLVER.append(None)
+        _SOLVER.append(time.process_time() - start)
+    return _SOLVER[0], _SOLVER[1]
+
+
+def _entry_points(compiled: Callable) -> list[tuple[int, int, int]] | None:
+    """(address, data, offset) of each LLVM function of a :class:`SplitKernel`, or None."""
+    parts, offsets = getattr(compiled, "parts", None), getattr(compiled, "offsets", None)
+    if parts is None or offsets is None:
+        return None
+    out = []
+    for part, offset in zip(parts, offsets):  # noqa: B905 - one more offset
+        if not hasattr(part, "as_ctypes"):
+            return None
+        out.append((*entry_point(part), int(offset)))
+    return out
 
 
 def _cholesky_rhs(

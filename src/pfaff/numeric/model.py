@@ -67,7 +67,8 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
     timings : dict
         CPU seconds of the stages that made the model: ``equations``, ``compile`` (its
         ``codegen`` part, see ``cache``: ``"hit"``, ``"miss"``, ``"off"`` or ``"reused"``),
-        ``evaluator`` and, once made, ``machine_code``.
+        ``evaluator`` and, once made, ``machine_code`` (and ``compiled_solve``: numba's load
+        of the compiled right-hand side above the fused limit, :mod:`pfaff.numeric.kernelchol`).
 
     Examples
     --------
@@ -309,7 +310,11 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
                 taus = [0.0] * (self.m + 1)  # (inputs of the whole right-hand side, unused here)
                 fixed = [*self._p, alpha, beta, *taus]
                 solve = (alpha, beta, floor, scales)
-                return kernel_rhs(fk, machine, n, fixed, live, solve, slow, self.stats)
+                rhs = kernel_rhs(fk, machine, n, fixed, live, solve, slow, self.stats)
+                seconds = getattr(rhs, "compiled_solve", None)  # numba's load, once per process
+                if seconds is not None:
+                    self.timings.setdefault("compiled_solve", seconds)
+                return rhs
         if run["full"] and run["rho"] and fk.rfn_aug is not None:  # M singular: M + ρAᵀA
             fixed = (alpha, beta, *([0.0] * (self.m + 1)), run["rho"], slow)
             make = fk.rfn_aug
