@@ -40,6 +40,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from pfaff.core.errors import ConstraintError
+from pfaff.numeric.bordered import BorderedBand
 from pfaff.numeric.streams import Index, indices, scatter_add, take
 
 if TYPE_CHECKING:
@@ -117,7 +118,6 @@ class GGLNewton:
             [np.array_equal(indices(r), indices(c)) for r, c in part.mass] for part in model.dyn
         ]
         self._ref, self._ref_h = np.zeros(m), np.zeros(mh)
-        self._lu = None
         self.factorizations = 0
         terms, _ = self._terms(t, y, yp, 1.0)
         self._ref[:], self._ref_h[:] = 0.0, 0.0  # (sizes are gathered from the run's states)
@@ -136,8 +136,14 @@ class GGLNewton:
         )
         self.pattern.indices, self.pattern.indptr = idx, indptr  # (scipy may widen them)
         per_row = np.bincount(idx, minlength=size)
-        self.dense_rows = np.flatnonzero(per_row > max(16.0, 4.0 * np.sqrt(size)))
+        dense = max(16.0, 4.0 * np.sqrt(size))
+        self.dense_rows = np.flatnonzero(per_row > dense)
         self._dense_entries = np.flatnonzero(np.isin(idx, self.dense_rows))
+        self.band = BorderedBand.plan(self.pattern, dense)
+        if self.band is not None:  # terms summed straight into the band's layout
+            self._band_slot = self.band.positions[self._slot]
+            self._band_dense = self.band.positions[self._dense_entries]
+        self._solve = None
 
     # ------------------------------------------------------------------ the residual
     def _split(self, y: np.ndarray) -> tuple:
@@ -177,26 +183,39 @@ class GGLNewton:
         self, t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float, JJ: np.ndarray
     ) -> None:
         """J = ∂F/∂y + c_j ∂F/∂y' in CSC order into ``JJ``, shape (nnz,) (IDA's ``jacfn``)."""
-        terms, values = self._terms(t, y, yp, cj)
-        vals = [
-            np.broadcast_to(v, (k,)) if s is None else np.broadcast_to(v, (k,))[s]
-            for (*_, k, s), v in zip(terms, values, strict=True)
-        ]
-        JJ[:] = np.bincount(self._slot, weights=np.concatenate(vals), minlength=self.nnz)
+        JJ[:] = np.bincount(self._slot, weights=self._values(t, y, yp, cj), minlength=self.nnz)
         JJ[self._dense_entries] *= DENSE_ROW_WEIGHT
 
+    def _values(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> np.ndarray:
+        """Every term's value per instance, in the order of ``_slot``."""
+        terms, values = self._terms(t, y, yp, cj)
+        return np.concatenate([
+            np.broadcast_to(v, (k,)) if s is None else np.broadcast_to(v, (k,))[s]
+            for (*_, k, s), v in zip(terms, values, strict=True)
+        ])  # fmt: skip
+
     def factor(self, t: float, y: np.ndarray, yp: np.ndarray, res: np.ndarray, cj: float) -> None:
-        """Assemble J and factor it (SuperLU, COLAMD, partial pivoting): IDA's preconditioner
-        setup. The factors are exact, so its GMRES converges at once until c_j drifts."""
-        try:
-            self._lu = spla.splu(
-                self.matrix(t, y, yp, cj), permc_spec="COLAMD", diag_pivot_thresh=1.0
+        """Assemble J and factor it: IDA's preconditioner setup. The factors are exact, so its
+        GMRES converges at once until c_j drifts. The band and border
+        (:class:`pfaff.numeric.bordered.BorderedBand`) where the pattern has one, else (or where
+        that B is singular) SuperLU (COLAMD, partial pivoting)."""
+        self.factorizations += 1
+        band = self.band
+        if band is not None:
+            flat = np.bincount(
+                self._band_slot, weights=self._values(t, y, yp, cj), minlength=band.length
             )
+            flat[self._band_dense] *= DENSE_ROW_WEIGHT
+            if band.factor(flat):
+                self._solve = band.solve
+                return
+        try:
+            lu = spla.splu(self.matrix(t, y, yp, cj), permc_spec="COLAMD", diag_pivot_thresh=1.0)
         except (RuntimeError, MemoryError) as e:  # exactly singular, or the factors too large
             raise ConstraintError(
                 f"IDA's Newton matrix could not be factored at t = {t:.17g}: {e}"
             ) from None
-        self.factorizations += 1
+        self._solve = lu.solve
 
     def precondition(
         self,
@@ -210,7 +229,7 @@ class GGLNewton:
         delta: float,
     ) -> None:
         """zvec = J⁻¹ rvec with the last factors (IDA's preconditioner solve)."""
-        zvec[:] = self._lu.solve(np.asarray(rvec))
+        zvec[:] = self._solve(np.asarray(rvec))
 
     def matrix(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> sps.csc_matrix:
         """J as a SciPy CSC matrix, shape (size, size) (for checks)."""

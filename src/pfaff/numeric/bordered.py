@@ -1,0 +1,175 @@
+"""An exact LU of a sparse matrix that is a narrow band but for a few dense rows and columns.
+
+The border S is the set of indices whose row or column holds more than ``dense`` entries (the
+ring's x: its equation meets every angle, every angle's equation meets its velocity). The rest,
+B = J[K, K] with K the other indices, is reordered by reverse Cuthill–McKee on the pattern of
+B + Bᵀ; when its bandwidths then stay small, J is factored as the block system
+
+    [B  C] [z_K]   [r_K]
+    [R  D] [z_S] = [r_S]
+
+with B in LAPACK band storage (``dgbtrf``, partial pivoting inside the band), X = B⁻¹C, and the
+Schur complement D − R X (k × k, k = |S|, dense LU): z_S = (D − R X)⁻¹ (r_S − R B⁻¹ r_K),
+z_K = B⁻¹ r_K − X z_S. The pattern is analysed once; each factorization takes one value per
+pattern entry, laid out by :attr:`BorderedBand.positions` in one flat array (band storage, then
+C, R and D), so that the caller can sum its terms straight into it.
+
+On the GGL Newton matrix of the ring of 2^16 particles (262 146 unknowns, 1.2 million entries):
+k = 2, bandwidths 4 and 4; SuperLU with COLAMD made 2.5 million entries of factors in 0.5 s,
+the band about 3.4 million entries of storage in 0.03 s (CPU, the machine shared).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.linalg.lapack as lapack
+import scipy.sparse as sps
+
+MAX_BAND = 32  # kl + ku beyond which the band is not worth it (SuperLU instead)
+MAX_BORDER = 16  # dense rows and columns at most
+
+
+class BorderedBand:
+    """The band-plus-border LU of a sparse pattern (see the module docstring).
+
+    Made by :meth:`plan`, which returns None where the pattern does not fit.
+
+    Attributes
+    ----------
+    size : int
+        The matrix's order.
+    border : ndarray of int, shape (k,)
+        The dense indices S.
+    order : ndarray of int, shape (size - k,)
+        The other indices in band order (``order[p]`` is B's p-th row and column).
+    kl, ku : int
+        B's lower and upper bandwidths in that order.
+    positions : ndarray of int, shape (nnz,)
+        For each entry of the pattern (CSC order), its place in the flat value array.
+    length : int
+        The flat value array's length.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sps
+    >>> n = 40  # a tridiagonal matrix with one dense row and column (index 0)
+    >>> J = sps.diags([np.full(n - 1, -1.0), np.full(n, 4.0), np.full(n - 1, -1.0)], [-1, 0, 1])
+    >>> J = sps.csc_matrix(J + sps.csc_matrix((np.ones(2 * n), (np.r_[np.zeros(n), np.arange(n)],
+    ...     np.r_[np.arange(n), np.zeros(n)])), shape=(n, n)))
+    >>> J.sort_indices()
+    >>> band = BorderedBand.plan(J, dense=8)
+    >>> band.border.tolist(), band.kl, band.ku
+    ([0], 1, 1)
+    >>> flat = np.bincount(band.positions, weights=J.data, minlength=band.length)
+    >>> band.factor(flat)
+    True
+    >>> r = np.arange(n, dtype=float)
+    >>> bool(np.allclose(J @ band.solve(r), r))
+    True
+    """
+
+    def __init__(self, size: int, border: np.ndarray, order: np.ndarray, kl: int, ku: int) -> None:
+        self.size, self.border, self.order = size, border, order
+        self.kl, self.ku = kl, ku
+        self.k, self.nb = border.size, order.size
+        self.ldab = 2 * kl + ku + 1
+        nb, k = self.nb, self.k
+        self._c0 = self.ldab * nb  # C stored as (k, nb), R as (k, nb), D as (k, k)
+        self._r0 = self._c0 + k * nb
+        self._d0 = self._r0 + k * nb
+        self.length = self._d0 + k * k
+        self.positions = np.empty(0, dtype=np.int64)
+        self._lu: tuple | None = None
+
+    @classmethod
+    def plan(
+        cls, pattern: sps.csc_matrix, dense: float, max_band: int = MAX_BAND
+    ) -> BorderedBand | None:
+        """Analyse a square CSC pattern (sorted indices); None where the border exceeds
+        ``MAX_BORDER`` indices or B's bandwidths ``kl + ku`` exceed ``max_band``."""
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        size = pattern.shape[0]
+        rows = pattern.indices.astype(np.int64)
+        cols = np.repeat(np.arange(size), np.diff(pattern.indptr))
+        per_row = np.bincount(rows, minlength=size)
+        per_col = np.bincount(cols, minlength=size)
+        border = np.flatnonzero((per_row > dense) | (per_col > dense))
+        if border.size > MAX_BORDER or border.size == size:
+            return None
+        inner = np.ones(size, dtype=bool)
+        inner[border] = False
+        keep = np.flatnonzero(inner)
+        local = np.full(size, -1, dtype=np.int64)
+        local[keep] = np.arange(keep.size)
+        both = inner[rows] & inner[cols]
+        nb = keep.size
+        sym = sps.csr_matrix(
+            (np.ones(2 * int(both.sum())), (np.r_[local[rows[both]], local[cols[both]]],
+             np.r_[local[cols[both]], local[rows[both]]])), shape=(nb, nb),
+        )  # fmt: skip
+        perm = np.asarray(reverse_cuthill_mckee(sym, symmetric_mode=True), dtype=np.int64)
+        rank = np.empty(nb, dtype=np.int64)
+        rank[perm] = np.arange(nb)
+        pr, pc = rank[local[rows[both]]], rank[local[cols[both]]]
+        kl = int(max(0, (pr - pc).max(initial=0)))
+        ku = int(max(0, (pc - pr).max(initial=0)))
+        if kl + ku > max_band:
+            return None
+        plan = cls(size, border, keep[perm], kl, ku)
+        plan.positions = plan._positions(rows, cols, inner, local, rank)
+        return plan
+
+    def _positions(
+        self, rows: np.ndarray, cols: np.ndarray, inner: np.ndarray, local: np.ndarray,
+        rank: np.ndarray,
+    ) -> np.ndarray:  # fmt: skip
+        """Each pattern entry's place in the flat array: band, C, R or D."""
+        slot = np.full(self.size, -1, dtype=np.int64)  # band index, or border index
+        slot[inner] = rank[local[inner]]
+        slot[self.border] = np.arange(self.k)
+        i, j = slot[rows], slot[cols]
+        ri, ci = inner[rows], inner[cols]
+        return np.select(
+            [ri & ci, ri & ~ci, ~ri & ci],
+            [
+                j * self.ldab + self.kl + self.ku + i - j,  # B: ab[kl + ku + i - j, j]
+                self._c0 + j * self.nb + i,  # C[i, j], stored transposed
+                self._r0 + i * self.nb + j,  # R[i, j]
+            ],
+            self._d0 + i * self.k + j,  # D[i, j]
+        )
+
+    def factor(self, flat: np.ndarray) -> bool:
+        """Factor the matrix whose values ``flat`` holds (laid out by :attr:`positions`; it is
+        overwritten). False where B or the Schur complement is singular."""
+        nb, k, kl, ku = self.nb, self.k, self.kl, self.ku
+        ab = flat[: self._c0].reshape(nb, self.ldab).T  # Fortran order, a view
+        lub, piv, info = lapack.dgbtrf(ab, kl, ku, overwrite_ab=1)
+        if info != 0:
+            return False
+        if k == 0:
+            self._lu = (lub, piv, None, None, None)
+            return True
+        C = flat[self._c0 : self._r0].reshape(k, nb).T
+        X, info = lapack.dgbtrs(lub, kl, ku, C, piv)
+        R = flat[self._r0 : self._d0].reshape(k, nb)
+        schur = flat[self._d0 :].reshape(k, k) - R @ X
+        lu, spiv, info = lapack.dgetrf(schur)
+        if info != 0 or not np.all(np.isfinite(lu)):
+            return False
+        self._lu = (lub, piv, X, R, (lu, spiv))
+        return True
+
+    def solve(self, r: np.ndarray) -> np.ndarray:
+        """z = J⁻¹ r with the last factors, shape (size,)."""
+        lub, piv, X, R, schur = self._lu
+        y, _ = lapack.dgbtrs(lub, self.kl, self.ku, r[self.order], piv, overwrite_b=1)
+        z = np.empty(self.size)
+        if schur is not None:
+            zs = sla.lu_solve(schur, r[self.border] - R @ y, check_finite=False)
+            y -= X @ zs
+            z[self.border] = zs
+        z[self.order] = y
+        return z
