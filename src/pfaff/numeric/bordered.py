@@ -21,6 +21,9 @@ the band about 3.4 million entries of storage in 0.03 s (CPU, the machine shared
 
 from __future__ import annotations
 
+import functools
+from types import ModuleType
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.linalg.lapack as lapack
@@ -28,6 +31,7 @@ import scipy.sparse as sps
 
 MAX_BAND = 32  # kl + ku beyond which the band is not worth it (SuperLU instead)
 MAX_BORDER = 16  # dense rows and columns at most
+COMPILED_FROM = 4096  # B's order from which numba's band LU (pfaff.numeric.bandlu) is used
 
 
 class BorderedBand:
@@ -80,7 +84,8 @@ class BorderedBand:
         self._d0 = self._r0 + k * nb
         self.length = self._d0 + k * k
         self.positions = np.empty(0, dtype=np.int64)
-        self._lu: tuple | None = None
+        self._band: tuple = (None, None, None)
+        self._schur: tuple | None = None
 
     @classmethod
     def plan(
@@ -144,32 +149,75 @@ class BorderedBand:
     def factor(self, flat: np.ndarray) -> bool:
         """Factor the matrix whose values ``flat`` holds (laid out by :attr:`positions`; it is
         overwritten). False where B or the Schur complement is singular."""
-        nb, k, kl, ku = self.nb, self.k, self.kl, self.ku
-        ab = flat[: self._c0].reshape(nb, self.ldab).T  # Fortran order, a view
-        lub, piv, info = lapack.dgbtrf(ab, kl, ku, overwrite_ab=1)
-        if info != 0:
+        nb, k = self.nb, self.k
+        if not self._band_factor(flat[: self._c0]):
             return False
         if k == 0:
-            self._lu = (lub, piv, None, None, None)
+            self._schur = None
             return True
-        C = flat[self._c0 : self._r0].reshape(k, nb).T
-        X, info = lapack.dgbtrs(lub, kl, ku, C, piv)
+        X = np.ascontiguousarray(flat[self._c0 : self._r0].reshape(k, nb).T)  # C, then B⁻¹C
+        live = np.flatnonzero(X.any(axis=0))  # (a column of zeros stays so)
+        if live.size == k:
+            self._band_solve(X)
+        elif live.size:
+            part = np.ascontiguousarray(X[:, live])
+            self._band_solve(part)
+            X[:, live] = part
         R = flat[self._r0 : self._d0].reshape(k, nb)
-        schur = flat[self._d0 :].reshape(k, k) - R @ X
-        lu, spiv, info = lapack.dgetrf(schur)
+        lu, spiv, info = lapack.dgetrf(flat[self._d0 :].reshape(k, k) - R @ X)
         if info != 0 or not np.all(np.isfinite(lu)):
             return False
-        self._lu = (lub, piv, X, R, (lu, spiv))
+        self._schur = (X, R, (lu, spiv))
         return True
 
     def solve(self, r: np.ndarray) -> np.ndarray:
         """z = J⁻¹ r with the last factors, shape (size,)."""
-        lub, piv, X, R, schur = self._lu
-        y, _ = lapack.dgbtrs(lub, self.kl, self.ku, r[self.order], piv, overwrite_b=1)
+        y = r[self.order][:, None]  # (a copy, C-contiguous)
+        self._band_solve(y)
+        y = y[:, 0]
         z = np.empty(self.size)
-        if schur is not None:
-            zs = sla.lu_solve(schur, r[self.border] - R @ y, check_finite=False)
+        if self._schur is not None:
+            X, R, lu = self._schur
+            zs = sla.lu_solve(lu, r[self.border] - R @ y, check_finite=False)
             y -= X @ zs
             z[self.border] = zs
         z[self.order] = y
         return z
+
+    # ------------------------------------------------------------------ the band's LU
+    def _band_factor(self, band: np.ndarray) -> bool:
+        """B's LU from its band storage (overwritten): numba's loops for a long band
+        (:mod:`pfaff.numeric.bandlu`), LAPACK's ``dgbtrf`` otherwise."""
+        kernels = _kernels() if self.nb >= COMPILED_FROM else None
+        if kernels is not None:
+            ab = band.reshape(self.nb, self.ldab)
+            piv = np.empty(self.nb, dtype=np.int64)
+            info = kernels.band_factor(ab, self.kl, self.ku, piv)
+        else:
+            ab = band.reshape(self.nb, self.ldab).T  # Fortran order, a view
+            ab, piv, info = lapack.dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
+        self._band = (kernels, ab, piv)
+        return info == 0
+
+    def _band_solve(self, b: np.ndarray) -> None:
+        """b ← B⁻¹ b in place, b of shape (nb, columns), C-contiguous."""
+        kernels, ab, piv = self._band
+        if kernels is not None:
+            kernels.band_solve(ab, self.kl, self.ku, piv, b)
+        else:
+            b[:] = lapack.dgbtrs(ab, self.kl, self.ku, b, piv)[0]
+
+
+@functools.cache
+def _kernels() -> ModuleType | None:
+    """:mod:`pfaff.numeric.bandlu`, compiled (or loaded from numba's cache) on first use; None
+    where numba cannot (LAPACK then)."""
+    try:
+        from pfaff.numeric import bandlu
+
+        ab, piv = np.zeros((1, 1)), np.zeros(1, dtype=np.int64)
+        bandlu.band_factor(np.ones((1, 1)), 0, 0, piv)
+        bandlu.band_solve(np.ones((1, 1)), 0, 0, piv, ab)
+    except Exception:  # (numba missing or failing: LAPACK's routines do the same)
+        return None
+    return bandlu
