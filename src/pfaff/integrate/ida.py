@@ -50,7 +50,7 @@ STALL_STEPS = 200  # consecutive steps of at most STALL_ULPS ulps of t: a stall
 STALL_ULPS = 4096.0
 STALL_FRACTION = 1e-6  # near t = 0, the ulps are those of this fraction of the span
 EPS = float(np.finfo(float).eps)
-FIRST_ERROR = 0.05  # the first step's estimated local error, in units of the tolerance
+FIRST_ERROR = 0.25  # the first step's estimated local error, in units of the tolerance
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
 
 
@@ -125,7 +125,7 @@ class IDAStepper(Stepper):
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
         self._ref, self._ref_h = np.zeros(m), np.zeros(mh)  # rows' largest sizes so far
-        alg = list(range(2 * n, self.size))
+        alg = np.arange(2 * n, self.size)  # (an array: scikit-sundae checks each entry)
         atol = np.full(self.size, float(opts.atol))
         atol[alg] = 1e12  # algebraic variables: out of the error test
         kw = opts.step_sizes()
@@ -149,7 +149,7 @@ class IDAStepper(Stepper):
             resfn,
             rtol=float(opts.rtol),
             atol=atol,
-            algebraic_idx=alg or None,
+            algebraic_idx=alg if alg.size else None,
             jacfn=jacfn,
             max_num_steps=1_000_000,
             **kw,

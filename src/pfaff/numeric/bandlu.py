@@ -94,3 +94,38 @@ def band_solve(
             if bj != 0.0:
                 for i in range(1, min(kv, j) + 1):
                     b[j - i, c] -= ab[j, kv - i] * bj
+
+
+@_compiled
+def sum_into(out: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:  # pragma: no cover
+    """out[slots[i]] += values[i] for every i (``np.bincount`` into an array kept between
+    factorizations: no new pages to fault in)."""
+    for i in range(slots.size):
+        out[slots[i]] += values[i]
+
+
+@_compiled
+def gather(out: np.ndarray, r: np.ndarray, order: np.ndarray) -> None:  # pragma: no cover
+    """out[p] = r[order[p]]."""
+    for p in range(order.size):
+        out[p] = r[order[p]]
+
+
+@_compiled
+def scatter_border(
+    z: np.ndarray,
+    y: np.ndarray,
+    X: np.ndarray,
+    zs: np.ndarray,
+    order: np.ndarray,
+    border: np.ndarray,
+) -> None:  # pragma: no cover
+    """z[order[p]] = y[p] − Σ_c X[p, c] zs[c], z[border] = zs: the bordered solve's end."""
+    k = zs.size
+    for p in range(order.size):
+        v = y[p]
+        for c in range(k):
+            v -= X[p, c] * zs[c]
+        z[order[p]] = v
+    for c in range(k):
+        z[border[c]] = zs[c]

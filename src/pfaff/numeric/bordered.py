@@ -86,6 +86,7 @@ class BorderedBand:
         self.positions = np.empty(0, dtype=np.int64)
         self._band: tuple = (None, None, None)
         self._schur: tuple | None = None
+        self._buffer: np.ndarray | None = None
 
     @classmethod
     def plan(
@@ -146,6 +147,19 @@ class BorderedBand:
             self._d0 + i * self.k + j,  # D[i, j]
         )
 
+    def assemble(self, slots: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """The flat value array of terms ``values`` at flat places ``slots`` (duplicates summed),
+        in a buffer kept between factorizations where the band is long."""
+        kernels = _kernels() if self.nb >= COMPILED_FROM else None
+        if kernels is None:
+            return np.bincount(slots, weights=values, minlength=self.length)
+        if self._buffer is None:
+            self._buffer = np.zeros(self.length)
+        else:
+            self._buffer.fill(0.0)
+        kernels.sum_into(self._buffer, slots, values)
+        return self._buffer
+
     def factor(self, flat: np.ndarray) -> bool:
         """Factor the matrix whose values ``flat`` holds (laid out by :attr:`positions`; it is
         overwritten). False where B or the Schur complement is singular."""
@@ -170,18 +184,27 @@ class BorderedBand:
         self._schur = (X, R, (lu, spiv))
         return True
 
-    def solve(self, r: np.ndarray) -> np.ndarray:
-        """z = J⁻¹ r with the last factors, shape (size,)."""
-        y = r[self.order][:, None]  # (a copy, C-contiguous)
+    def solve(self, r: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """z = J⁻¹ r with the last factors, shape (size,), into ``out`` if given."""
+        kernels = self._band[0]
+        z = np.empty(self.size) if out is None else out
+        if kernels is None:
+            y = r[self.order][:, None]
+        else:
+            y = np.empty((self.nb, 1))
+            kernels.gather(y[:, 0], r, self.order)
         self._band_solve(y)
         y = y[:, 0]
-        z = np.empty(self.size)
-        if self._schur is not None:
-            X, R, lu = self._schur
-            zs = sla.lu_solve(lu, r[self.border] - R @ y, check_finite=False)
-            y -= X @ zs
+        if self._schur is None:
+            z[self.order] = y
+            return z
+        X, R, lu = self._schur
+        zs = sla.lu_solve(lu, r[self.border] - R @ y, check_finite=False)
+        if kernels is None:
+            z[self.order] = y - X @ zs
             z[self.border] = zs
-        z[self.order] = y
+        else:
+            kernels.scatter_border(z, y, X, zs, self.order, self.border)
         return z
 
     # ------------------------------------------------------------------ the band's LU
@@ -218,6 +241,9 @@ def _kernels() -> ModuleType | None:
         ab, piv = np.zeros((1, 1)), np.zeros(1, dtype=np.int64)
         bandlu.band_factor(np.ones((1, 1)), 0, 0, piv)
         bandlu.band_solve(np.ones((1, 1)), 0, 0, piv, ab)
+        bandlu.sum_into(ab[0], piv, ab[0])
+        bandlu.gather(ab[0], ab[0], piv)
+        bandlu.scatter_border(ab[0], ab[0], ab, ab[0], piv, piv)
     except Exception:  # (numba missing or failing: LAPACK's routines do the same)
         return None
     return bandlu
