@@ -189,12 +189,11 @@ class BorderedBand:
         kernels = self._band[0]
         z = np.empty(self.size) if out is None else out
         if kernels is None:
-            y = r[self.order][:, None]
+            y = r[self.order]
         else:
-            y = np.empty((self.nb, 1))
-            kernels.gather(y[:, 0], r, self.order)
-        self._band_solve(y)
-        y = y[:, 0]
+            y = np.empty(self.nb)
+            kernels.gather(y, r, self.order)
+        self._band_solve(y.reshape(self.nb, 1))
         if self._schur is None:
             z[self.order] = y
             return z
@@ -238,12 +237,15 @@ def _kernels() -> ModuleType | None:
     try:
         from pfaff.numeric import bandlu
 
-        ab, piv = np.zeros((1, 1)), np.zeros(1, dtype=np.int64)
-        bandlu.band_factor(np.ones((1, 1)), 0, 0, piv)
-        bandlu.band_solve(np.ones((1, 1)), 0, 0, piv, ab)
-        bandlu.sum_into(ab[0], piv, ab[0])
-        bandlu.gather(ab[0], ab[0], piv)
-        bandlu.scatter_border(ab[0], ab[0], ab, ab[0], piv, piv)
+        # one call of each with the argument types of the runs (IDA's vectors are read-only)
+        ab, piv, one = np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.ones(1)
+        fixed = np.ones(1)
+        fixed.flags.writeable = False
+        bandlu.band_factor(ab, 0, 0, piv)
+        bandlu.band_solve(ab, 0, 0, piv, np.ones((1, 1)))
+        bandlu.sum_into(one, piv, one)
+        bandlu.gather(one, fixed, piv)
+        bandlu.scatter_border(one, one, ab, one, piv, piv)
     except Exception:  # (numba missing or failing: LAPACK's routines do the same)
         return None
     return bandlu
