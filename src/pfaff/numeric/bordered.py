@@ -111,14 +111,13 @@ class BorderedBand:
         local[keep] = np.arange(keep.size)
         both = inner[rows] & inner[cols]
         nb = keep.size
-        sym = sps.csr_matrix(
-            (np.ones(2 * int(both.sum())), (np.r_[local[rows[both]], local[cols[both]]],
-             np.r_[local[cols[both]], local[rows[both]]])), shape=(nb, nb),
-        )  # fmt: skip
+        lr, lc = local[rows[both]], local[cols[both]]
+        inside = sps.csr_matrix((np.ones(lr.size), (lr, lc)), shape=(nb, nb))
+        sym = (inside + inside.T).tocsr()
         perm = np.asarray(reverse_cuthill_mckee(sym, symmetric_mode=True), dtype=np.int64)
         rank = np.empty(nb, dtype=np.int64)
         rank[perm] = np.arange(nb)
-        pr, pc = rank[local[rows[both]]], rank[local[cols[both]]]
+        pr, pc = rank[lr], rank[lc]
         kl = int(max(0, (pr - pc).max(initial=0)))
         ku = int(max(0, (pc - pr).max(initial=0)))
         if kl + ku > max_band:
@@ -137,15 +136,15 @@ class BorderedBand:
         slot[self.border] = np.arange(self.k)
         i, j = slot[rows], slot[cols]
         ri, ci = inner[rows], inner[cols]
-        return np.select(
-            [ri & ci, ri & ~ci, ~ri & ci],
-            [
-                j * self.ldab + self.kl + self.ku + i - j,  # B: ab[kl + ku + i - j, j]
-                self._c0 + j * self.nb + i,  # C[i, j], stored transposed
-                self._r0 + i * self.nb + j,  # R[i, j]
-            ],
-            self._d0 + i * self.k + j,  # D[i, j]
-        )
+        out = self._d0 + i * self.k + j  # D[i, j]
+        band = ri & ci
+        ib, jb = i[band], j[band]
+        out[band] = jb * self.ldab + self.kl + self.ku + ib - jb  # B: ab[kl + ku + i - j, j]
+        c = ri & ~ci
+        out[c] = self._c0 + j[c] * self.nb + i[c]  # C[i, j], stored transposed
+        r = ~ri & ci
+        out[r] = self._r0 + i[r] * self.nb + j[r]  # R[i, j]
+        return out
 
     def assemble(self, slots: np.ndarray, values: np.ndarray) -> np.ndarray:
         """The flat value array of terms ``values`` at flat places ``slots`` (duplicates summed),
