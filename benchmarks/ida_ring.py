@@ -46,6 +46,7 @@ from pfaff.integrate.feasible import refuse_sparse_ida, sparse_ida_estimate
 
 SIZES = [2**10, 2**12, 2**14, 2**16]
 REFUSED = [2**22, 2**24]
+WARM = 2048  # the warm-up ring: large enough for the compiled band LU (pfaff.numeric.bandlu)
 M_, R_, F_, TH0 = 1.0, 0.5, 2.0, 0.3
 
 
@@ -73,9 +74,10 @@ def main() -> None:
           f"{os.environ.get('OPENBLAS_NUM_THREADS')}")  # fmt: skip
     head = ("N", "proj s", "ida s", "ida/proj", "ida steps", "factor.", "proj err", "ida err")
     print("{:>7} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9} {:>9}".format(*head))
-    warm = pfaff.models.rolling_ring(16, force=True, family=True).equations()
+    # imports, caches, and numba's band LU (loaded once per process from WARM members on)
+    warm = pfaff.models.rolling_ring(WARM, force=True, family=True).equations()
     warm = warm.compile({"M": M_, "r": R_, "F": F_})
-    run(warm, 16, "projection", args.cap), run(warm, 16, "ida", args.cap)  # imports, caches
+    run(warm, WARM, "projection", args.cap), run(warm, WARM, "ida", args.cap)
     for n in args.sizes:
         ring = pfaff.models.rolling_ring(n, force=True, family=True)
         model = ring.equations().compile({"M": M_, "r": R_, "F": F_})

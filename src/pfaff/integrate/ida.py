@@ -17,11 +17,13 @@ that it stays invertible where a linkage folds flat and A loses rank.
 
 A family model (``model.sparse_dae``) takes the same residual and Newton matrix over its template
 streams instead, in CSC (:class:`pfaff.numeric.ggl.GGLNewton`: exact blocks, and the state
-derivatives of each template's outputs by differences in its local coordinates), factored by
-SciPy's SuperLU as the exact preconditioner of IDA's GMRES, which then converges in one
-iteration until c_j drifts and IDA keeps the factors over several steps. scikit-sundae's
-``linsolver="sparse"`` (SuperLU_MT with this matrix as ``jacfn``) does as well in time (ring of
-2^16, 1 s: 44 steps, 12.4 s against 43 steps, 11.5 s; CPU, the machine busy) but chooses its
+derivatives of each template's outputs by differences in its local coordinates), factored
+exactly (a band with a dense border, :mod:`pfaff.numeric.bordered`, or SciPy's SuperLU) as the
+preconditioner of IDA's GMRES, which then converges in one iteration until c_j drifts and IDA
+keeps the factors over several steps; its first step comes from the local error of IDA's
+first-order start (:func:`first_step`). scikit-sundae's ``linsolver="sparse"`` (SuperLU_MT with
+this matrix as ``jacfn``) did as well as SuperLU in time (ring of 2^16, 1 s: 44 steps, 12.4 s
+against 43 steps, 11.5 s; CPU, the machine busy) but chooses its
 own pivots by magnitude with no ordering option: where they fill in, SuperLU_MT runs out of its
 preallocated storage and aborts the process (the ring of 1024 before the x row was weighted),
 where SciPy raises an error a run can report. ``ida_jacobian`` given: the dense path, for any
