@@ -115,17 +115,18 @@ def gather(out: np.ndarray, r: np.ndarray, order: np.ndarray) -> None:  # pragma
 def scatter_border(
     z: np.ndarray,
     y: np.ndarray,
-    X: np.ndarray,
+    Xt: np.ndarray,
     zs: np.ndarray,
     order: np.ndarray,
     border: np.ndarray,
+    live: np.ndarray,
 ) -> None:  # pragma: no cover
-    """z[order[p]] = y[p] − Σ_c X[p, c] zs[c], z[border] = zs: the bordered solve's end."""
-    k = zs.size
+    """z[order[p]] = y[p] − Σ_c Xt[c, p] zs[c] over the ``live`` rows c of Xt (the others are
+    zero), z[border] = zs: the bordered solve's end."""
     for p in range(order.size):
         v = y[p]
-        for c in range(k):
-            v -= X[p, c] * zs[c]
+        for c in live:
+            v -= Xt[c, p] * zs[c]
         z[order[p]] = v
-    for c in range(k):
+    for c in range(zs.size):
         z[border[c]] = zs[c]

@@ -141,7 +141,7 @@ class BorderedBand:
         ib, jb = i[band], j[band]
         out[band] = jb * self.ldab + self.kl + self.ku + ib - jb  # B: ab[kl + ku + i - j, j]
         c = ri & ~ci
-        out[c] = self._c0 + j[c] * self.nb + i[c]  # C[i, j], stored transposed
+        out[c] = self._c0 + j[c] * self.nb + i[c]  # C[i, j], stored transposed (by rows)
         r = ~ri & ci
         out[r] = self._r0 + i[r] * self.nb + j[r]  # R[i, j]
         return out
@@ -168,19 +168,15 @@ class BorderedBand:
         if k == 0:
             self._schur = None
             return True
-        X = np.ascontiguousarray(flat[self._c0 : self._r0].reshape(k, nb).T)  # C, then B⁻¹C
-        live = np.flatnonzero(X.any(axis=0))  # (a column of zeros stays so)
-        if live.size == k:
-            self._band_solve(X)
-        elif live.size:
-            part = np.ascontiguousarray(X[:, live])
-            self._band_solve(part)
-            X[:, live] = part
+        Xt = flat[self._c0 : self._r0].reshape(k, nb)  # Cᵀ, then (B⁻¹C)ᵀ, in place
+        live = np.flatnonzero(Xt.any(axis=1))  # (a column of zeros stays so)
+        for c in live:
+            self._band_solve(Xt[c].reshape(nb, 1))
         R = flat[self._r0 : self._d0].reshape(k, nb)
-        lu, spiv, info = lapack.dgetrf(flat[self._d0 :].reshape(k, k) - R @ X)
+        lu, spiv, info = lapack.dgetrf(flat[self._d0 :].reshape(k, k) - R @ Xt.T)
         if info != 0 or not np.all(np.isfinite(lu)):
             return False
-        self._schur = (X, R, (lu, spiv))
+        self._schur = (Xt, R, (lu, spiv), live)
         return True
 
     def solve(self, r: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -196,13 +192,13 @@ class BorderedBand:
         if self._schur is None:
             z[self.order] = y
             return z
-        X, R, lu = self._schur
+        Xt, R, lu, live = self._schur
         zs = sla.lu_solve(lu, r[self.border] - R @ y, check_finite=False)
         if kernels is None:
-            z[self.order] = y - X @ zs
+            z[self.order] = y - Xt[live].T @ zs[live]
             z[self.border] = zs
         else:
-            kernels.scatter_border(z, y, X, zs, self.order, self.border)
+            kernels.scatter_border(z, y, Xt, zs, self.order, self.border, live)
         return z
 
     # ------------------------------------------------------------------ the band's LU
@@ -244,7 +240,7 @@ def _kernels() -> ModuleType | None:
         bandlu.band_solve(ab, 0, 0, piv, np.ones((1, 1)))
         bandlu.sum_into(one, piv, one)
         bandlu.gather(one, fixed, piv)
-        bandlu.scatter_border(one, one, ab, one, piv, piv)
+        bandlu.scatter_border(one, one, ab, one, piv, piv, piv)
     except Exception:  # (numba missing or failing: LAPACK's routines do the same)
         return None
     return bandlu
