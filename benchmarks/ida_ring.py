@@ -11,14 +11,16 @@ An IDA run is capped at ``--cap`` seconds (``max_seconds``; "cap" in the table).
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-28 on the 2-core machine shared with other runs (load average 7.6), CPU
+Measured 2026-11-28 on the 2-core machine shared with other runs (load average 6.1), CPU
 seconds, medians of three::
 
           N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
-       1024     0.014     0.068       4.9        19       14   1.1e-15   2.7e-09
-       4096     0.030     0.193       6.5        19       14   1.6e-15   2.7e-09
-      16384     0.068     0.689      10.1        19       14   2.2e-16   2.7e-09
-      65536     0.266     2.918      11.0        19       14   1.1e-15   2.7e-09
+       1024     0.013     0.064       4.9        19       14   1.1e-15   2.7e-09
+       4096     0.034     0.183       5.5        19       14   1.6e-15   2.7e-09
+      16384     0.085     0.851      10.0        19       14   2.2e-16   2.7e-09
+      65536     0.307     3.192      10.4        19       14   1.1e-15   2.7e-09
+
+Other runs the same hour (load 7.6 to 8): 11.0, 11.2, 11.7 at 2^16; 10.1, 11.2 at 2^14.
 
 Before (2026-11-27, load 7 to 11, one repeat): 43 steps and 35 SuperLU factorizations of about
 0.3 to 0.5 s each at 2^16, 15.2 s (41x); 0.241 s (7.9x) at 2^10. Now the Newton matrix is a band
@@ -28,7 +30,7 @@ step comes from its first-order local error (h0 about 2e-5 instead of 5e-12: 19 
 solves (about 11 ms), 56 residuals (5 ms), IDA's own vector work (0.4 s) and its setup (pattern,
 band plan, SUNDIALS: 0.35-0.45 s); the band's work is bound by memory traffic (27 MB of band per
 solve). The target (10x at 2^16) is
-met at 2^14 and missed by about 10 % at 2^16 here. Numba's band LU loads once per process (about
+reached at the edge at best: 10.4 to 11.7 here. Numba's band LU loads once per process (about
 0.9 s; 2 s compiling the first time): the warm-up takes it. Before the band path, IDA on a
 family was dense: 214 s at N = 1024, refused from about 2000 members on. N = 2^22 and 2^24 are
 refused (about 22 and 88 GiB estimated from SuperLU's fill, against 15 GiB, half the memory).
