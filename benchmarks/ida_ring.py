@@ -29,8 +29,7 @@ step comes from its first-order local error (h0 about 2e-5 instead of 5e-12: 19 
 2^16 a run is about 14 factorizations (assembly included, 60-75 ms each), 56 preconditioner
 solves (about 11 ms), 56 residuals (5 ms), IDA's own vector work (0.4 s) and its setup (pattern,
 band plan, SUNDIALS: 0.35-0.45 s); the band's work is bound by memory traffic (27 MB of band per
-solve). The target (10x at 2^16) is
-reached at the edge at best: 10.4 to 11.7 here. Numba's band LU loads once per process (about
+solve). The target (10x at 2^16) is not met: 10.4 to 11.7 here. Numba's band LU loads once per process (about
 0.9 s; 2 s compiling the first time): the warm-up takes it. Before the band path, IDA on a
 family was dense: 214 s at N = 1024, refused from about 2000 members on. N = 2^22 and 2^24 are
 refused (about 22 and 88 GiB estimated from SuperLU's fill, against 15 GiB, half the memory).
