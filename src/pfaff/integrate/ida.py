@@ -66,15 +66,44 @@ def first_step(
     """IDA's first step from the local error of its first-order start, as ``first_step``
     (empty where the estimate fails: IDA's own choice then).
 
-    IDA's own estimate keeps ‖h y'₀‖ ≤ 1/2 in its error weights, where a velocity at rest weighs
-    1/atol: h₀ ≈ 5e-12 on the pushed ring at rest, then 35 steps (and Newton matrices) doubling it
-    to the motion's scale (43 steps for 1 s, 20 with this estimate). Used for families (the
-    sparse path), where every step costs a factorization of an N-long matrix; small systems
-    keep IDA's own (their tests hold to the last digits where the contact tests look: a
-    trajectory leaving a sphere stays outside it in IDA's tiny first steps). Backward Euler's local error is h²/2 ‖y''‖, y'' = [q̈, q⃛] (q⃛ by
-    a difference of q̈ along an explicit Euler step, sized as in Hairer, Nørsett & Wanner,
-    Solving ODE I, II.4); h₀ makes it ``FIRST_ERROR`` of the tolerance, at most a hundredth of
-    the span. IDA's error test still accepts or shrinks it.
+    Backward Euler's local error is h²/2 ‖y''‖, y'' = [q̈, q⃛] in IDA's error weights
+    (atol + rtol |y|, RMS over q and q̇), q⃛ by a difference of q̈ along an explicit Euler step
+    sized as in Hairer, Nørsett & Wanner, Solving ODE I, II.4: h₀ makes it ``FIRST_ERROR`` of
+    the tolerance, at most a hundredth of the span; IDA's error test still accepts or shrinks
+    it. IDA's own estimate keeps ‖h y'₀‖ ≤ 1/2 in those weights, where a velocity at rest
+    weighs 1/atol: h₀ ≈ 5e-12 on the pushed ring at rest, then 35 steps (and Newton matrices)
+    doubling it (43 steps for 1 s; 19 from this estimate). Used for families (the sparse path),
+    where every step costs a factorization of an N-long matrix; small systems keep IDA's own
+    (a contact test looks at the last digits there: a particle leaving a sphere stays outside
+    it in IDA's tiny first steps).
+
+    Parameters
+    ----------
+    model : DynamicsModel
+        Its ``solve`` gives q̈ at the trial Euler step.
+    t0, t_end : float
+    state : tuple of ndarray, each shape (n,)
+        q, q̇ and q̈ at t0.
+    opts : StepperOptions
+        rtol, atol and max_step.
+
+    Returns
+    -------
+    dict
+        ``{"first_step": h0}``, or empty.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pfaff.integrate.stepper import StepperOptions
+    >>> class Fall:  # q̈ = -g everywhere: q⃛ = 0, y'' = [-g, 0]
+    ...     def solve(self, t, q, qd):
+    ...         return np.full(1, -9.81), np.zeros(0)
+    >>> start = (np.ones(1), np.zeros(1), np.full(1, -9.81))
+    >>> h = first_step(Fall(), 0.0, start, 1.0, StepperOptions(rtol=1e-9, atol=1e-11))
+    >>> weight = np.sqrt(((9.81 / (1e-11 + 1e-9)) ** 2 + 0.0) / 2)  # RMS of y'' / (atol + rtol|y|)
+    >>> bool(np.isclose(h["first_step"], np.sqrt(2 * FIRST_ERROR / weight)))
+    True
     """
     q0, qd0, qdd0 = state
     span = abs(t_end - t0)

@@ -23,6 +23,16 @@ Examples
 >>> band_solve(ab, kl, ku, piv, b)
 >>> bool(np.allclose(A @ b[:, 0], np.arange(1.0, n + 1)))
 True
+>>> out, slots = np.zeros(3), np.array([0, 2, 0])
+>>> sum_into(out, slots, np.array([1.0, 2.0, 3.0]))
+>>> gather(out, out.copy(), np.array([2, 1, 0]))
+>>> out.tolist()
+[2.0, 0.0, 4.0]
+>>> z = np.zeros(3)  # z[order] = y - Xᵀ zs over the live rows, z[border] = zs
+>>> scatter_border(z, np.ones(2), np.array([[1.0, 2.0]]), np.array([0.5]), np.array([0, 2]),
+...                np.array([1]), np.array([0]))
+>>> z.tolist()
+[0.5, 0.5, 0.0]
 """
 
 from __future__ import annotations
