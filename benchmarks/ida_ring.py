@@ -11,19 +11,28 @@ An IDA run is capped at ``--cap`` seconds (``max_seconds``; "cap" in the table).
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-27 on the 2-core machine shared with other runs (load average 7 to 11), CPU
-seconds, one repeat::
+Measured 2026-11-28 on the 2-core machine shared with other runs (load average 6.1), CPU
+seconds, medians of three::
 
           N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
-       1024     0.031     0.241       7.9        43       35   1.1e-15   2.7e-09
-       4096     0.101     0.849       8.4        43       35   6.7e-16   2.7e-09
-      16384     0.113     3.215      28.4        43       35   1.1e-15   2.7e-09
-      65536     0.367    15.178      41.4        43       35   1.1e-15   2.7e-09
+       1024     0.013     0.064       4.9        19       14   1.1e-15   2.7e-09
+       4096     0.034     0.183       5.5        19       14   1.6e-15   2.7e-09
+      16384     0.085     0.851      10.0        19       14   2.2e-16   2.7e-09
+      65536     0.307     3.192      10.4        19       14   1.1e-15   2.7e-09
 
-IDA's 35 factorizations of about 0.3 s each (SuperLU, 2.2 times the matrix's 1.2 million
-entries at 2^16) are most of its time: the target is not met (41x). Before, IDA on a family was
-dense: 214 s at N = 1024, and refused from about 2000 members on. N = 2^22 and 2^24 are refused
-(about 22 and 88 GiB estimated against 17.5 GiB available).
+Other runs the same hour (load 7.6 to 8): 11.0, 11.2, 11.7 at 2^16; 10.1, 11.2 at 2^14.
+
+Before (2026-11-27, load 7 to 11, one repeat): 43 steps and 35 SuperLU factorizations of about
+0.3 to 0.5 s each at 2^16, 15.2 s (41x); 0.241 s (7.9x) at 2^10. Now the Newton matrix is a band
+with a dense border (numeric.bordered: 0.03 to 0.06 s a factorization at 2^16) and IDA's first
+step comes from its first-order local error (h0 about 2e-5 instead of 5e-12: 19 steps). At
+2^16 a run is about 14 factorizations (assembly included, 60-75 ms each), 56 preconditioner
+solves (about 11 ms), 56 residuals (5 ms), IDA's own vector work (0.4 s) and its setup (pattern,
+band plan, SUNDIALS: 0.35-0.45 s); the band's work is bound by memory traffic (27 MB of band per
+solve). The target (10x at 2^16) is not met: 10.4 to 11.7 here. Numba's band LU loads once per process (about
+0.9 s; 2 s compiling the first time): the warm-up takes it. Before the band path, IDA on a
+family was dense: 214 s at N = 1024, refused from about 2000 members on. N = 2^22 and 2^24 are
+refused (about 22 and 88 GiB estimated from SuperLU's fill, against 15 GiB, half the memory).
 
 Run from the project root::
 
@@ -46,6 +55,7 @@ from pfaff.integrate.feasible import refuse_sparse_ida, sparse_ida_estimate
 
 SIZES = [2**10, 2**12, 2**14, 2**16]
 REFUSED = [2**22, 2**24]
+WARM = 2048  # the warm-up ring: large enough for the compiled band LU (pfaff.numeric.bandlu)
 M_, R_, F_, TH0 = 1.0, 0.5, 2.0, 0.3
 
 
@@ -73,9 +83,10 @@ def main() -> None:
           f"{os.environ.get('OPENBLAS_NUM_THREADS')}")  # fmt: skip
     head = ("N", "proj s", "ida s", "ida/proj", "ida steps", "factor.", "proj err", "ida err")
     print("{:>7} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9} {:>9}".format(*head))
-    warm = pfaff.models.rolling_ring(16, force=True, family=True).equations()
+    # imports, caches, and numba's band LU (loaded once per process from WARM members on)
+    warm = pfaff.models.rolling_ring(WARM, force=True, family=True).equations()
     warm = warm.compile({"M": M_, "r": R_, "F": F_})
-    run(warm, 16, "projection", args.cap), run(warm, 16, "ida", args.cap)  # imports, caches
+    run(warm, WARM, "projection", args.cap), run(warm, WARM, "ida", args.cap)
     for n in args.sizes:
         ring = pfaff.models.rolling_ring(n, force=True, family=True)
         model = ring.equations().compile({"M": M_, "r": R_, "F": F_})

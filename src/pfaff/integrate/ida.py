@@ -17,11 +17,13 @@ that it stays invertible where a linkage folds flat and A loses rank.
 
 A family model (``model.sparse_dae``) takes the same residual and Newton matrix over its template
 streams instead, in CSC (:class:`pfaff.numeric.ggl.GGLNewton`: exact blocks, and the state
-derivatives of each template's outputs by differences in its local coordinates), factored by
-SciPy's SuperLU as the exact preconditioner of IDA's GMRES, which then converges in one
-iteration until c_j drifts and IDA keeps the factors over several steps. scikit-sundae's
-``linsolver="sparse"`` (SuperLU_MT with this matrix as ``jacfn``) does as well in time (ring of
-2^16, 1 s: 44 steps, 12.4 s against 43 steps, 11.5 s; CPU, the machine busy) but chooses its
+derivatives of each template's outputs by differences in its local coordinates), factored
+exactly (a band with a dense border, :mod:`pfaff.numeric.bordered`, or SciPy's SuperLU) as the
+preconditioner of IDA's GMRES, which then converges in one iteration until c_j drifts and IDA
+keeps the factors over several steps; its first step comes from the local error of IDA's
+first-order start (:func:`first_step`). scikit-sundae's ``linsolver="sparse"`` (SuperLU_MT with
+this matrix as ``jacfn``) did as well as SuperLU in time (ring of 2^16, 1 s: 44 steps, 12.4 s
+against 43 steps, 11.5 s; CPU, the machine busy) but chooses its
 own pivots by magnitude with no ordering option: where they fill in, SuperLU_MT runs out of its
 preallocated storage and aborts the process (the ring of 1024 before the x row was weighted),
 where SciPy raises an error a run can report. ``ida_jacobian`` given: the dense path, for any
@@ -50,7 +52,79 @@ STALL_STEPS = 200  # consecutive steps of at most STALL_ULPS ulps of t: a stall
 STALL_ULPS = 4096.0
 STALL_FRACTION = 1e-6  # near t = 0, the ulps are those of this fraction of the span
 EPS = float(np.finfo(float).eps)
+FIRST_ERROR = 0.25  # the first step's estimated local error, in units of the tolerance
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
+
+
+def first_step(
+    model: DynamicsModel,
+    t0: float,
+    state: tuple[np.ndarray, np.ndarray, np.ndarray],
+    t_end: float,
+    opts: StepperOptions,
+) -> dict[str, float]:
+    """IDA's first step from the local error of its first-order start, as ``first_step``
+    (empty where the estimate fails: IDA's own choice then).
+
+    Backward Euler's local error is h²/2 ‖y''‖, y'' = [q̈, q⃛] in IDA's error weights
+    (atol + rtol |y|, RMS over q and q̇), q⃛ by a difference of q̈ along an explicit Euler step
+    sized as in Hairer, Nørsett & Wanner, Solving ODE I, II.4: h₀ makes it ``FIRST_ERROR`` of
+    the tolerance, at most a hundredth of the span; IDA's error test still accepts or shrinks
+    it. IDA's own estimate keeps ‖h y'₀‖ ≤ 1/2 in those weights, where a velocity at rest
+    weighs 1/atol: h₀ ≈ 5e-12 on the pushed ring at rest, then 35 steps (and Newton matrices)
+    doubling it (43 steps for 1 s; 19 from this estimate). Used for families (the sparse path),
+    where every step costs a factorization of an N-long matrix; small systems keep IDA's own
+    (a contact test looks at the last digits there: a particle leaving a sphere stays outside
+    it in IDA's tiny first steps).
+
+    Parameters
+    ----------
+    model : DynamicsModel
+        Its ``solve`` gives q̈ at the trial Euler step.
+    t0, t_end : float
+    state : tuple of ndarray, each shape (n,)
+        q, q̇ and q̈ at t0.
+    opts : StepperOptions
+        rtol, atol and max_step.
+
+    Returns
+    -------
+    dict
+        ``{"first_step": h0}``, or empty.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pfaff.integrate.stepper import StepperOptions
+    >>> class Fall:  # q̈ = -g everywhere: q⃛ = 0, y'' = [-g, 0]
+    ...     def solve(self, t, q, qd):
+    ...         return np.full(1, -9.81), np.zeros(0)
+    >>> start = (np.ones(1), np.zeros(1), np.full(1, -9.81))
+    >>> h = first_step(Fall(), 0.0, start, 1.0, StepperOptions(rtol=1e-9, atol=1e-11))
+    >>> weight = np.sqrt(((9.81 / (1e-11 + 1e-9)) ** 2 + 0.0) / 2)  # RMS of y'' / (atol + rtol|y|)
+    >>> bool(np.isclose(h["first_step"], np.sqrt(2 * FIRST_ERROR / weight)))
+    True
+    """
+    q0, qd0, qdd0 = state
+    span = abs(t_end - t0)
+    y0 = np.concatenate([q0, qd0])
+    scale = float(opts.atol) + float(opts.rtol) * np.abs(y0)
+    d0 = _rms(y0 / scale)
+    d1 = _rms(np.concatenate([qd0, qdd0]) / scale)
+    delta = min(1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1, span)
+    try:
+        qdd1, _ = model.solve(t0 + delta, q0 + delta * qd0, qd0 + delta * qdd0)
+    except (PfaffError, ArithmeticError, np.linalg.LinAlgError):
+        return {}
+    d2 = _rms(np.concatenate([qdd0, (qdd1 - qdd0) / delta]) / scale)
+    h = min(0.01 * span, float(opts.max_step or np.inf))
+    if d2 > 0:
+        h = min(h, float(np.sqrt(2.0 * FIRST_ERROR / d2)))
+    return {"first_step": h} if np.isfinite(h) and h > 0 else {}
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x)))) if x.size else 0.0
 
 
 class IDAStepper(Stepper):
@@ -82,7 +156,7 @@ class IDAStepper(Stepper):
         y0 = np.concatenate([q0, qd0, lam0, np.zeros(mh)])
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
         self._ref, self._ref_h = np.zeros(m), np.zeros(mh)  # rows' largest sizes so far
-        alg = list(range(2 * n, self.size))
+        alg = np.arange(2 * n, self.size)  # (an array: scikit-sundae checks each entry)
         atol = np.full(self.size, float(opts.atol))
         atol[alg] = 1e12  # algebraic variables: out of the error test
         kw = opts.step_sizes()
@@ -95,6 +169,8 @@ class IDAStepper(Stepper):
             precond = IDAPrecond(newton.factor, newton.precondition)
             resfn, jacfn = newton.residual, None
             kw |= {"linsolver": "gmres", "precond": precond}
+            if opts.first_step is None:  # (each step costs a factorization of an N-long matrix)
+                kw |= first_step(model, t0, (q0, qd0, qdd0), t_end, opts)
             self.fd = False
         else:
             refuse_dense_ida(self.size, n)  # before IDA allocates anything (integrate.feasible)
@@ -104,7 +180,7 @@ class IDAStepper(Stepper):
             resfn,
             rtol=float(opts.rtol),
             atol=atol,
-            algebraic_idx=alg or None,
+            algebraic_idx=alg if alg.size else None,
             jacfn=jacfn,
             max_num_steps=1_000_000,
             **kw,

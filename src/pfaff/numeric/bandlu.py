@@ -1,0 +1,142 @@
+"""LU of a banded matrix with partial pivoting and its solves, compiled by numba.
+
+The algorithm and the storage are LAPACK's ``dgbtf2`` / ``dgbtrs``: column j of the matrix is
+row j of ``ab`` (shape (n, 2 kl + ku + 1)), entry (i, j) at ``ab[j, kl + ku + i − j]``, the
+first kl places of each row kept for the fill-in of the row interchanges; pivots 0-based. A
+band a few entries wide (the ring's GGL matrix: kl = ku = 4) makes LAPACK call BLAS once or
+twice per column, which is most of its time; these loops run inside one call. Imported on
+first use by :mod:`pfaff.numeric.bordered` (numba then loads, from its on-disk cache after the
+first time).
+
+Examples
+--------
+>>> import numpy as np
+>>> n, kl, ku = 6, 1, 1
+>>> A = np.diag(np.full(n, 1.0)) + np.diag(np.full(n - 1, 3.0), -1) + np.diag(np.full(n - 1, 2.0), 1)
+>>> ab = np.zeros((n, 2 * kl + ku + 1))
+>>> for i, j in zip(*np.nonzero(A)):
+...     ab[j, kl + ku + i - j] = A[i, j]
+>>> piv = np.zeros(n, dtype=np.int64)
+>>> band_factor(ab, kl, ku, piv)
+0
+>>> b = np.arange(1.0, n + 1)[:, None]
+>>> band_solve(ab, kl, ku, piv, b)
+>>> bool(np.allclose(A @ b[:, 0], np.arange(1.0, n + 1)))
+True
+>>> out, slots = np.zeros(3), np.array([0, 2, 0])
+>>> sum_into(out, slots, np.array([1.0, 2.0, 3.0]))
+>>> gather(out, out.copy(), np.array([2, 1, 0]))
+>>> out.tolist()
+[2.0, 0.0, 4.0]
+>>> z = np.zeros(3)  # z[order] = y - Xᵀ zs over the live rows, z[border] = zs
+>>> scatter_border(z, np.ones(2), np.array([[1.0, 2.0]]), np.array([0.5]), np.array([0, 2]),
+...                np.array([1]), np.array([0]))
+>>> z.tolist()
+[0.5, 0.5, 0.0]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+def _compiled(fn):
+    """``njit`` with numba's on-disk cache, or without it where no folder is writable."""
+    try:
+        return njit(cache=True, error_model="numpy")(fn)
+    except RuntimeError:  # "no locator available": compiled once per process instead
+        return njit(error_model="numpy")(fn)
+
+
+@_compiled
+def band_factor(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:  # pragma: no cover
+    """LU in place (``dgbtf2``); returns 0, or j + 1 where column j has no nonzero pivot."""
+    n = ab.shape[0]
+    kv = kl + ku
+    ju = 0
+    for j in range(n):
+        km = min(kl, n - 1 - j)
+        jp, big = 0, abs(ab[j, kv])
+        for p in range(1, km + 1):
+            if abs(ab[j, kv + p]) > big:
+                jp, big = p, abs(ab[j, kv + p])
+        piv[j] = j + jp
+        if big == 0.0:
+            return j + 1
+        ju = max(ju, min(j + ku + jp, n - 1))
+        if jp != 0:  # interchange rows j and j + jp in columns j … ju
+            for c in range(j, ju + 1):
+                a, b = kv + j - c, kv + j + jp - c
+                ab[c, a], ab[c, b] = ab[c, b], ab[c, a]
+        if km > 0:
+            r = 1.0 / ab[j, kv]
+            for p in range(1, km + 1):
+                ab[j, kv + p] *= r
+            for c in range(j + 1, ju + 1):
+                u = ab[c, kv + j - c]
+                if u != 0.0:
+                    for p in range(1, km + 1):
+                        ab[c, kv + j + p - c] -= ab[j, kv + p] * u
+    return 0
+
+
+@_compiled
+def band_solve(
+    ab: np.ndarray, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
+) -> None:  # pragma: no cover
+    """b ← A⁻¹ b in place with the factors of :func:`band_factor`, b of shape (n, k)."""
+    n, k = b.shape
+    kv = kl + ku
+    for c in range(k):
+        for j in range(n - 1):  # L, with the interchanges
+            lm = min(kl, n - 1 - j)
+            p = piv[j]
+            if p != j:
+                b[p, c], b[j, c] = b[j, c], b[p, c]
+            bj = b[j, c]
+            if bj != 0.0:
+                for i in range(1, lm + 1):
+                    b[j + i, c] -= ab[j, kv + i] * bj
+        for j in range(n - 1, -1, -1):  # U, kl + ku above the diagonal
+            b[j, c] /= ab[j, kv]
+            bj = b[j, c]
+            if bj != 0.0:
+                for i in range(1, min(kv, j) + 1):
+                    b[j - i, c] -= ab[j, kv - i] * bj
+
+
+@_compiled
+def sum_into(out: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:  # pragma: no cover
+    """out[slots[i]] += values[i] for every i (``np.bincount`` into an array kept between
+    factorizations: no new pages to fault in)."""
+    for i in range(slots.size):
+        out[slots[i]] += values[i]
+
+
+@_compiled
+def gather(out: np.ndarray, r: np.ndarray, order: np.ndarray) -> None:  # pragma: no cover
+    """out[p] = r[order[p]]."""
+    for p in range(order.size):
+        out[p] = r[order[p]]
+
+
+@_compiled
+def scatter_border(
+    z: np.ndarray,
+    y: np.ndarray,
+    Xt: np.ndarray,
+    zs: np.ndarray,
+    order: np.ndarray,
+    border: np.ndarray,
+    live: np.ndarray,
+) -> None:  # pragma: no cover
+    """z[order[p]] = y[p] − Σ_c Xt[c, p] zs[c] over the ``live`` rows c of Xt (the others are
+    zero), z[border] = zs: the bordered solve's end."""
+    for p in range(order.size):
+        v = y[p]
+        for c in live:
+            v -= Xt[c, p] * zs[c]
+        z[order[p]] = v
+    for c in range(zs.size):
+        z[border[c]] = zs[c]

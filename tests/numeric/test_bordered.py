@@ -1,0 +1,96 @@
+"""The band-plus-border LU (pfaff.numeric.bordered, its compiled loops pfaff.numeric.bandlu)
+against SciPy's SuperLU and LAPACK on the ring's GGL Newton matrix and small made-up matrices."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+import pfaff
+from pfaff.numeric import bordered
+from pfaff.numeric.bordered import BorderedBand
+from pfaff.numeric.ggl import GGLNewton
+
+N = 64  # (the ring's x column and row count as dense from 4 √size = 64 entries on)
+
+
+@pytest.fixture(scope="module")
+def newton():
+    model = pfaff.models.rolling_ring(N, force=True, family=True).equations()
+    model = model.compile({"M": 1.3, "r": 0.5, "F": 2.0}).for_run()
+    q, qd = pfaff.models.ring_state(N, radius=0.5, theta=0.4, theta_dot=1.5)
+    qdd, lam = model.solve(0.0, q, qd)
+    y = np.concatenate([q, qd, lam, np.zeros(N)])
+    yp = np.concatenate([qd, qdd, np.zeros(2 * N)])
+    return GGLNewton(model, np.arange(N), 0.0, y, yp), y, yp
+
+
+def _bordered(n: int, rng: np.random.Generator, kl: int = 2, ku: int = 1) -> sps.csc_matrix:
+    """A random band (diagonally dominant) with a dense row and column at index 0."""
+    J = sps.random(n, n, density=1.0, random_state=rng, format="lil")
+    J = sps.csc_matrix(sps.tril(sps.triu(J, -kl), ku)) + sps.eye(n) * (kl + ku + 2)
+    J = sps.lil_matrix(J)
+    J[0, :], J[:, 0] = rng.standard_normal(n), rng.standard_normal((n, 1))
+    J = sps.csc_matrix(J)
+    J.sort_indices()
+    return J
+
+
+def test_the_ring_matrix_is_a_band_with_a_border_of_x(newton) -> None:
+    """x's position and velocity columns (every angle's equation meets them) form the border;
+    the rest, reordered, is a band 4 wide either side; the solve agrees with SuperLU's."""
+    g, y, yp = newton
+    band = g.band
+    assert band is not None
+    assert band.border.tolist() == [0, g.n]  # q_x and v_x (and F₂'s x row)
+    assert band.kl <= 4 and band.ku <= 4
+    J = g.matrix(0.0, y, yp, 25.0)
+    g.factor(0.0, y, yp, np.empty(0), 25.0)
+    r = np.random.default_rng(3).standard_normal(g.size)
+    z = np.empty(g.size)
+    g.precondition(0.0, y, yp, np.empty(0), r, z, 25.0, 0.0)
+    ref = spla.splu(J, permc_spec="COLAMD").solve(r)
+    np.testing.assert_allclose(z, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
+
+
+def test_compiled_loops_agree_with_lapack(monkeypatch) -> None:
+    """numba's band LU (used from COMPILED_FROM on) and LAPACK's dgbtrf/dgbtrs give the same
+    solution of a bordered band, with row interchanges (the band is not dominant by rows)."""
+    rng = np.random.default_rng(11)
+    J = _bordered(300, rng)
+    J = sps.csc_matrix(J.multiply(rng.uniform(0.1, 10.0, (300, 1))))  # pivots move
+    J.sort_indices()
+    r = rng.standard_normal(300)
+    solutions = []
+    for start in (10**9, 0):
+        monkeypatch.setattr(bordered, "COMPILED_FROM", start)
+        band = BorderedBand.plan(J, dense=20)
+        assert band is not None and band.border.tolist() == [0]
+        flat = band.assemble(band.positions, J.data)
+        assert band.factor(flat)
+        solutions.append(band.solve(r))
+    np.testing.assert_allclose(solutions[1], solutions[0], rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(J @ solutions[1], r, rtol=0, atol=1e-10)
+
+
+def test_singular_band_is_reported_and_wide_patterns_refused() -> None:
+    """B singular (its first row zero once the border is left out) with J regular: factor
+    says so (the Newton matrix then goes to SuperLU); a 2-D grid's band is too wide."""
+    n = 30
+    J = sps.lil_matrix(sps.eye(n) * 4.0)
+    J[1, 1] = 0.0
+    J[0, 1:] = 1.0  # the dense row and column
+    J[1:, 0] = 1.0
+    J[1, 0] = 1.0
+    J = sps.csc_matrix(J)
+    J.sort_indices()
+    assert np.linalg.matrix_rank(J.toarray()) == n
+    band = BorderedBand.plan(J, dense=10)
+    assert band is not None and not band.factor(band.assemble(band.positions, J.data))
+    side = 30
+    line = sps.diags([-1.0, 2.0, -1.0], [-1, 0, 1], (side, side))
+    grid = sps.csc_matrix(sps.kronsum(line, line))
+    grid.sort_indices()
+    assert BorderedBand.plan(grid, dense=10) is None
