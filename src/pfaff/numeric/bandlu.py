@@ -38,18 +38,11 @@ True
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from pfaff.numeric.numbacode import cached
 
 
-def _compiled(fn):
-    """``njit`` with numba's on-disk cache, or without it where no folder is writable."""
-    try:
-        return njit(cache=True, error_model="numpy")(fn)
-    except RuntimeError:  # "no locator available": compiled once per process instead
-        return njit(error_model="numpy")(fn)
-
-
-@_compiled
+@cached
 def band_factor(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:  # pragma: no cover
     """LU in place (``dgbtf2``); returns 0, or j + 1 where column j has no nonzero pivot."""
     n = ab.shape[0]
@@ -81,7 +74,7 @@ def band_factor(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:  # pr
     return 0
 
 
-@_compiled
+@cached
 def band_solve(
     ab: np.ndarray, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
 ) -> None:  # pragma: no cover
@@ -106,7 +99,7 @@ def band_solve(
                     b[j - i, c] -= ab[j, kv - i] * bj
 
 
-@_compiled
+@cached
 def sum_into(out: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:  # pragma: no cover
     """out[slots[i]] += values[i] for every i (``np.bincount`` into an array kept between
     factorizations: no new pages to fault in)."""
@@ -114,14 +107,14 @@ def sum_into(out: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:  #
         out[slots[i]] += values[i]
 
 
-@_compiled
+@cached
 def gather(out: np.ndarray, r: np.ndarray, order: np.ndarray) -> None:  # pragma: no cover
     """out[p] = r[order[p]]."""
     for p in range(order.size):
         out[p] = r[order[p]]
 
 
-@_compiled
+@cached
 def scatter_border(
     z: np.ndarray,
     y: np.ndarray,

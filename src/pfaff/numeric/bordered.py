@@ -29,6 +29,8 @@ import scipy.linalg as sla
 import scipy.linalg.lapack as lapack
 import scipy.sparse as sps
 
+from pfaff.core.held import signals_held
+
 MAX_BAND = 32  # kl + ku beyond which the band is not worth it (SuperLU instead)
 MAX_BORDER = 16  # dense rows and columns at most
 COMPILED_FROM = 4096  # B's order from which numba's band LU (pfaff.numeric.bandlu) is used
@@ -228,7 +230,13 @@ class BorderedBand:
 @functools.cache
 def _kernels() -> ModuleType | None:
     """:mod:`pfaff.numeric.bandlu`, compiled (or loaded from numba's cache) on first use; None
-    where numba cannot (LAPACK then)."""
+    where numba cannot (LAPACK then). Ctrl-C and SIGTERM wait for the load (numba could
+    swallow them)."""
+    with signals_held():
+        return _loaded()
+
+
+def _loaded() -> ModuleType | None:
     try:
         from pfaff.numeric import bandlu
 
