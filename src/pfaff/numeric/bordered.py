@@ -172,8 +172,10 @@ class BorderedBand:
             return True
         Xt = flat[self._c0 : self._r0].reshape(k, nb)  # Cᵀ, then (B⁻¹C)ᵀ, in place
         live = np.flatnonzero(Xt.any(axis=1))  # (a column of zeros stays so)
-        for c in live:
-            self._band_solve(Xt[c].reshape(nb, 1))
+        if live.size == k:
+            self._band_solve(Xt)  # every column in one pass
+        elif live.size:
+            Xt[live] = self._band_solve(Xt[live])
         R = flat[self._r0 : self._d0].reshape(k, nb)
         lu, spiv, info = lapack.dgetrf(flat[self._d0 :].reshape(k, k) - R @ Xt.T)
         if info != 0 or not np.all(np.isfinite(lu)):
@@ -190,7 +192,7 @@ class BorderedBand:
         else:
             y = np.empty(self.nb)
             kernels.gather(y, r, self.order)
-        self._band_solve(y.reshape(self.nb, 1))
+        self._band_solve(y.reshape(1, self.nb))
         if self._schur is None:
             z[self.order] = y
             return z
@@ -218,13 +220,15 @@ class BorderedBand:
         self._band = (kernels, ab, piv)
         return info == 0
 
-    def _band_solve(self, b: np.ndarray) -> None:
-        """b ← B⁻¹ b in place, b of shape (nb, columns), C-contiguous."""
+    def _band_solve(self, b: np.ndarray) -> np.ndarray:
+        """b ← B⁻¹ b in place, b of shape (columns, nb) (a right side per row), C-contiguous;
+        returns b."""
         kernels, ab, piv = self._band
         if kernels is not None:
             kernels.band_solve(ab, self.kl, self.ku, piv, b)
         else:
-            b[:] = lapack.dgbtrs(ab, self.kl, self.ku, b, piv)[0]
+            b[:] = lapack.dgbtrs(ab, self.kl, self.ku, b.T, piv)[0].T
+        return b
 
 
 @functools.cache
