@@ -19,8 +19,11 @@ Examples
 >>> piv = np.zeros(n, dtype=np.int64)
 >>> band_factor(ab, kl, ku, piv)
 0
+>>> ue = ku + int((piv - np.arange(n)).max())  # U's upper bandwidth
+>>> lower, upper = np.empty((n, kl)), np.empty((n, ue + 1))
+>>> band_split(ab, kl, ku, lower, upper)
 >>> b = np.arange(1.0, n + 1)[None, :]
->>> band_solve(ab, kl, ku, piv, b)
+>>> band_solve(lower, upper, piv, b)
 >>> bool(np.allclose(A @ b[0], np.arange(1.0, n + 1)))
 True
 >>> out, slots = np.zeros(3), np.array([0, 2, 0])
@@ -75,13 +78,30 @@ def band_factor(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:  # pr
 
 
 @cached
-def band_solve(
-    ab: np.ndarray, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
+def band_split(
+    ab: np.ndarray, kl: int, ku: int, lower: np.ndarray, upper: np.ndarray
 ) -> None:  # pragma: no cover
-    """b ← A⁻¹ b in place with the factors of :func:`band_factor`, b of shape (k, n): k right
+    """The factors of :func:`band_factor` in two compact arrays for the solves: ``lower[j, i]``
+    the multiplier of row j + i + 1 by row j, ``upper[j, 0]`` U's diagonal and ``upper[j, i]``
+    U[j − i, j], i up to ``upper.shape[1] − 1``, U's actual upper bandwidth (ku without row
+    interchanges: most of ab's 2 kl + ku + 1 places are then never read)."""
+    n = ab.shape[0]
+    kv = kl + ku
+    for j in range(n):
+        for i in range(kl):
+            lower[j, i] = ab[j, kv + 1 + i]
+        for i in range(upper.shape[1]):
+            upper[j, i] = ab[j, kv - i]
+
+
+@cached
+def band_solve(
+    lower: np.ndarray, upper: np.ndarray, piv: np.ndarray, b: np.ndarray
+) -> None:  # pragma: no cover
+    """b ← A⁻¹ b in place with the factors of :func:`band_split`, b of shape (k, n): k right
     sides as rows, solved in one pass over the factors (their reading is the cost)."""
     k, n = b.shape
-    kv = kl + ku
+    kl, ue = lower.shape[1], upper.shape[1] - 1
     for j in range(n - 1):  # L, with the interchanges
         lm = min(kl, n - 1 - j)
         p = piv[j]
@@ -89,16 +109,16 @@ def band_solve(
             if p != j:
                 b[c, p], b[c, j] = b[c, j], b[c, p]
             bj = b[c, j]
-            for i in range(1, lm + 1):
-                b[c, j + i] -= ab[j, kv + i] * bj
-    for j in range(n - 1, -1, -1):  # U, kl + ku above the diagonal
-        d = ab[j, kv]
-        top = min(kv, j)
+            for i in range(lm):
+                b[c, j + 1 + i] -= lower[j, i] * bj
+    for j in range(n - 1, -1, -1):  # U
+        d = upper[j, 0]
+        top = min(ue, j)
         for c in range(k):
             bj = b[c, j] / d
             b[c, j] = bj
             for i in range(1, top + 1):
-                b[c, j - i] -= ab[j, kv - i] * bj
+                b[c, j - i] -= upper[j, i] * bj
 
 
 @cached

@@ -89,6 +89,7 @@ class BorderedBand:
         self._band: tuple = (None, None, None)
         self._schur: tuple | None = None
         self._buffer: np.ndarray | None = None
+        self._factors: tuple = (None, None)  # the compiled path's compact L and U
 
     @classmethod
     def plan(
@@ -214,18 +215,31 @@ class BorderedBand:
             ab = band.reshape(self.nb, self.ldab)
             piv = np.empty(self.nb, dtype=np.int64)
             info = kernels.band_factor(ab, self.kl, self.ku, piv)
+            if info == 0:
+                ue = self.ku + int((piv - np.arange(self.nb)).max(initial=0))
+                ab = self._split(kernels, ab, min(ue, self.kl + self.ku))
         else:
             ab = band.reshape(self.nb, self.ldab).T  # Fortran order, a view
             ab, piv, info = lapack.dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
         self._band = (kernels, ab, piv)
         return info == 0
 
+    def _split(self, kernels: ModuleType, ab: np.ndarray, ue: int) -> tuple:
+        """(lower, upper): the factors in ab compacted (:func:`pfaff.numeric.bandlu.band_split`),
+        into arrays kept between factorizations."""
+        lower, upper = self._factors
+        if lower is None or upper.shape[1] != ue + 1:
+            lower, upper = np.empty((self.nb, self.kl)), np.empty((self.nb, ue + 1))
+            self._factors = (lower, upper)
+        kernels.band_split(ab, self.kl, self.ku, lower, upper)
+        return lower, upper
+
     def _band_solve(self, b: np.ndarray) -> np.ndarray:
         """b ← B⁻¹ b in place, b of shape (columns, nb) (a right side per row), C-contiguous;
         returns b."""
         kernels, ab, piv = self._band
         if kernels is not None:
-            kernels.band_solve(ab, self.kl, self.ku, piv, b)
+            kernels.band_solve(*ab, piv, b)
         else:
             b[:] = lapack.dgbtrs(ab, self.kl, self.ku, b.T, piv)[0].T
         return b
@@ -249,7 +263,8 @@ def _loaded() -> ModuleType | None:
         fixed = np.ones(1)
         fixed.flags.writeable = False
         bandlu.band_factor(ab, 0, 0, piv)
-        bandlu.band_solve(ab, 0, 0, piv, np.ones((1, 1)))
+        bandlu.band_split(ab, 0, 0, ab[:, :0], ab)
+        bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
         bandlu.sum_into(one, piv, one)
         bandlu.gather(one, fixed, piv)
         bandlu.scatter_border(one, one, ab, one, piv, piv, piv)
