@@ -180,7 +180,9 @@ class IDAStepper(Stepper):
             resfn,
             rtol=float(opts.rtol),
             atol=atol,
-            algebraic_idx=alg if alg.size else None,
+            # (IDA reads these only for IDACalcIC and suppressalg, neither used: a family leaves
+            # out scikit-sundae's Python loops over them, the same steps to the last bit)
+            algebraic_idx=alg if alg.size and not sparse else None,
             jacfn=jacfn,
             max_num_steps=1_000_000,
             **kw,
