@@ -16,7 +16,10 @@ C, R and D), so that the caller can sum its terms straight into it.
 
 On the GGL Newton matrix of the ring of 2^16 particles (262 146 unknowns, 1.2 million entries):
 k = 2, bandwidths 4 and 4; SuperLU with COLAMD made 2.5 million entries of factors in 0.5 s,
-the band about 3.4 million entries of storage in 0.03 s (CPU, the machine shared).
+the band about 3.4 million entries of storage in 0.03 s (CPU, the machine shared). There the
+compiled path copies the factors into compact L (kl wide) and U (its actual width: kl + ku with
+the interchanges this matrix needs, ku without) for the solves, which are bound by reading them:
+7 ms instead of 9 to 12 ms a solve, 5 ms a copy; the border's columns are solved in one pass.
 """
 
 from __future__ import annotations
