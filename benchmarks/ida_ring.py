@@ -11,28 +11,36 @@ An IDA run is capped at ``--cap`` seconds (``max_seconds``; "cap" in the table).
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-28 on the 2-core machine shared with other runs (load average 6.1), CPU
+Measured 2026-11-28 on the 2-core machine shared with other runs (load average 6.7), CPU
 seconds, medians of three::
 
           N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
-       1024     0.013     0.064       4.9        19       14   1.1e-15   2.7e-09
-       4096     0.034     0.183       5.5        19       14   1.6e-15   2.7e-09
-      16384     0.085     0.851      10.0        19       14   2.2e-16   2.7e-09
-      65536     0.307     3.192      10.4        19       14   1.1e-15   2.7e-09
+       1024     0.019     0.054       2.9        19        7   1.1e-15   2.5e-09
+       4096     0.021     0.129       6.3        19        7   1.6e-15   2.5e-09
+      16384     0.060     0.464       7.7        19        7   2.2e-16   2.6e-09
+      65536     0.206     1.759       8.5        19        7   1.1e-15   2.6e-09
 
-Other runs the same hour (load 7.6 to 8): 11.0, 11.2, 11.7 at 2^16; 10.1, 11.2 at 2^14.
+Another run the same minutes (load 7.8): 9.0 at 2^16 (2.372 s), 3.7 at 2^10. The code before
+the kept factors and the compact band solves, run between those two (load 7.2): 10.9 at 2^16
+(2.878 s, 14 factorizations), 4.9 at 2^10; by pairs of runs alternated, medians of three (load
+8.4 to 9): 3.00 and 3.08 s before, 2.62 and 1.95 s after at 2^16 (10.8 and 9.6x before, 7.7
+and 8.8x after); 0.092 s before, 0.050 s after at 2^10.
 
-Before (2026-11-27, load 7 to 11, one repeat): 43 steps and 35 SuperLU factorizations of about
-0.3 to 0.5 s each at 2^16, 15.2 s (41x); 0.241 s (7.9x) at 2^10. Now the Newton matrix is a band
+Earlier (2026-11-27, load 7 to 11, one repeat): 43 steps and 35 SuperLU factorizations of about
+0.3 to 0.5 s each at 2^16, 15.2 s (41x); 0.241 s (7.9x) at 2^10. The Newton matrix is a band
 with a dense border (numeric.bordered: 0.03 to 0.06 s a factorization at 2^16) and IDA's first
-step comes from its first-order local error (h0 about 2e-5 instead of 5e-12: 19 steps). At
-2^16 a run is about 14 factorizations (assembly included, 60-75 ms each), 56 preconditioner
-solves (about 11 ms), 56 residuals (5 ms), IDA's own vector work (0.4 s) and its setup (pattern,
-band plan, SUNDIALS: 0.35-0.45 s); the band's work is bound by memory traffic (27 MB of band per
-solve). The target (10x at 2^16) is not met: 10.4 to 11.7 here. Numba's band LU loads once per process (about
-0.9 s; 2 s compiling the first time): the warm-up takes it. Before the band path, IDA on a
-family was dense: 214 s at N = 1024, refused from about 2000 members on. N = 2^22 and 2^24 are
-refused (about 22 and 88 GiB estimated from SuperLU's fill, against 15 GiB, half the memory).
+step comes from its first-order local error (h0 about 2e-5 instead of 5e-12: 19 steps). The
+factors are kept while c_j stays within a factor 3 of theirs (numeric.ggl ``KEEP_RATIO``: 7
+factorizations instead of 14, GMRES iterating a little more). At 2^16 a run is now about 7
+factorizations (assembly included, 40-60 ms each), 53 preconditioner solves (7 to 9 ms: the
+compact band factors, read once per solve), 53 residuals (3 to 5 ms), IDA's own vector work
+(about 0.4 s) and its setup (pattern, band plan, SUNDIALS: 0.25-0.45 s); the band's work is
+bound by memory traffic. The target (10x at 2^16) is met in these runs (7.7 to 9.0), with
+little margin on this loaded machine, where the projection method's own time varies by 50 %.
+Numba's band LU loads once per process (about 0.9 s; 2 s compiling the first time): the
+warm-up takes it. Before the band path, IDA on a family was dense: 214 s at N = 1024, refused
+from about 2000 members on. N = 2^22 and 2^24 are refused (about 22 and 88 GiB estimated from
+SuperLU's fill, against half the memory available: 15 to 22 GiB).
 
 Run from the project root::
 
