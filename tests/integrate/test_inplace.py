@@ -1,6 +1,8 @@
 """The in-place DOP853 of long states (pfaff.integrate.inplace) against SciPy's DOP853: the same
 method, so the same steps and the same results to rounding."""
 
+import importlib.util
+
 import numpy as np
 import pytest
 from scipy.integrate import DOP853
@@ -8,6 +10,16 @@ from scipy.integrate import DOP853
 import pfaff
 from pfaff.integrate import inplace
 from pfaff.integrate.inplace import InPlaceDOP853
+
+HAVE_NUMBA = importlib.util.find_spec("numba") is not None
+
+
+@pytest.fixture(autouse=True, params=["numpy", "compiled"])
+def sums(request, monkeypatch):
+    """Every test on both paths of the stage sums: NumPy's passes and the compiled loops of
+    pfaff.integrate.inplacejit (from any state size; without numba both are NumPy's)."""
+    monkeypatch.setattr(inplace, "JIT_MIN", 0 if request.param == "compiled" else 10**12)
+    return request.param
 
 
 def _van_der_pol(t, y):
@@ -44,13 +56,15 @@ def test_same_steps_as_scipy_with_rejections():
 
 # accepted at once: all to rounding; rejected first, then shorter by the rejected error estimate
 @pytest.mark.parametrize(("h", "tol"), [(0.05, 1e-14), (0.6, 1e-10)])
-def test_one_step_as_scipy(h, tol):
+@pytest.mark.parametrize("atol", [1e-10, [1e-10, 3e-9]])
+def test_one_step_as_scipy(h, tol, atol, sums):
     """From the same state and step size, one step of each: the same attempts, the same step,
     new state and dense output to rounding (after a rejection, to the rounding of the error
     estimate that shortened it), the same next step size."""
-    kw = dict(rtol=1e-8, atol=1e-10, first_step=h)
+    kw = dict(rtol=1e-8, atol=atol, first_step=h)
     a = DOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, **kw)
     b = InPlaceDOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, into=_into, **kw)
+    assert (b._jit is not None) == (sums == "compiled" and HAVE_NUMBA)
     a.step()
     b.step()
     assert a.nfev == b.nfev
