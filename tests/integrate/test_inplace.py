@@ -106,3 +106,19 @@ def test_ring_run_as_scipy(ring, monkeypatch, first_step):
     np.testing.assert_allclose(a.qd, b.qd, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(a.nc_work, b.nc_work, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(a.nc_work, 2.0 * (a.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)
+
+
+def test_work_node_by_node(ring, monkeypatch):
+    """The work up to reported times inside steps with the dense output asked for one node at
+    a time (long states, pfaff.integrate.work.ONE_NODE_FROM) equals the one call for all four
+    nodes, and F Δx."""
+    from pfaff.integrate import work
+
+    q0, qd0 = pfaff.models.ring_state(64, 0.5, theta=np.pi, theta_dot=0.7)
+    kw = dict(t_eval=[0.0, 0.13, 0.31, 0.5], max_step=0.1)
+    monkeypatch.setattr(inplace, "INPLACE_MIN", 0)
+    a = pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw)
+    monkeypatch.setattr(work, "ONE_NODE_FROM", 1)
+    b = pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw)
+    np.testing.assert_allclose(b.nc_work, a.nc_work, rtol=1e-14, atol=1e-16)
+    np.testing.assert_allclose(b.nc_work, 2.0 * (b.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)
