@@ -21,7 +21,7 @@ GAUSS_X, GAUSS_W = np.polynomial.legendre.leggauss(4)  # nodes on [-1, 1] and we
 # on the quintic Hermite interpolant three nodes suffice: exact for degree 5, like the interpolant
 HERMITE_X, HERMITE_W = np.polynomial.legendre.leggauss(3)
 # coordinates from which the dense output is asked for one node at a time: at the ring's 2^24
-# particles the four nodes' states together were 1 GiB of a run's 7.1 GiB peak
+# particles the four nodes' states together are 1 GiB, beside K's 2.9 GiB
 ONE_NODE_FROM = 1 << 16
 
 Endpoint = tuple[float, np.ndarray, np.ndarray]  # (t, y = [q, q̇], ẏ = [q̇, q̈])
