@@ -98,6 +98,26 @@ def test_cumsum_band_with_scaled_diagonal() -> None:
         np.testing.assert_allclose(L.T @ band.solve_t(c), c, atol=1e-12)
 
 
+def test_compiled_backward_running_sum(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Lᵀ z = c by the compiled running sum from the end (long bands) and by NumPy's cumsum:
+    the same additions in the same order, so the same numbers; and Lᵀ z = c holds."""
+    import pfaff.numeric.banded as banded
+
+    m = 5000
+    c = np.random.default_rng(2).normal(size=m)
+    for a0 in (1.0, 2.5):
+        R = np.vstack([np.full(m, a0), np.full(m, -a0)])
+        R[0, :2] = [-3.0, 1.5]  # a head of rows that differ from the constant tail
+        L = np.diag(R[0]) + np.diag(R[1, 1:], -1)
+        monkeypatch.setattr(banded, "JIT_FROM", 10**9)
+        ref = LowerBand(R, constant=True).solve_t(c)
+        monkeypatch.setattr(banded, "JIT_FROM", 1)
+        z = LowerBand(R, constant=True).solve_t(c)
+        assert banded._summer() is None or z.strides[0] > 0  # (the compiled path's own array)
+        np.testing.assert_array_equal(z, ref)
+        np.testing.assert_allclose(L.T @ z, c, atol=1e-9)
+
+
 def _ring(n: int):
     return pfaff.models.rolling_ring(n, force=True, family=True).equations().compile(VALS)
 
