@@ -35,10 +35,18 @@ def pytest_configure(config: pytest.Config) -> None:
 def _prepare_stepping_loop() -> None:
     """Compile the compiled stepping loop (numba) once, here, into numba's on-disk cache, so
     the workers load it instead of each compiling it at once on a cold machine (about 11 s of
-    CPU each). Without numba, or with ``PFAFF_LOOP=0``, nothing happens."""
+    CPU each); likewise the compiled passes of long states (sin and cos, DOP853's sums, the
+    multipliers' running sum: about 2.5 s). Without numba, or with ``PFAFF_LOOP=0``
+    (``PFAFF_JIT=0``), nothing happens."""
+    from pfaff.integrate.inplacejit import kernels
     from pfaff.integrate.loop import _kernel
+    from pfaff.numeric.banded import _summer
+    from pfaff.numeric.trigjit import compiled
 
     _kernel()
+    compiled()
+    kernels()
+    _summer()
 
 
 @pytest.hookimpl(optionalhook=True)

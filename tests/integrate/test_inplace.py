@@ -1,6 +1,8 @@
 """The in-place DOP853 of long states (pfaff.integrate.inplace) against SciPy's DOP853: the same
 method, so the same steps and the same results to rounding."""
 
+import importlib.util
+
 import numpy as np
 import pytest
 from scipy.integrate import DOP853
@@ -8,6 +10,16 @@ from scipy.integrate import DOP853
 import pfaff
 from pfaff.integrate import inplace
 from pfaff.integrate.inplace import InPlaceDOP853
+
+HAVE_NUMBA = importlib.util.find_spec("numba") is not None
+
+
+@pytest.fixture(autouse=True, params=["numpy", "compiled"])
+def sums(request, monkeypatch):
+    """Every test on both paths of the stage sums: NumPy's passes and the compiled loops of
+    pfaff.integrate.inplacejit (from any state size; without numba both are NumPy's)."""
+    monkeypatch.setattr(inplace, "JIT_MIN", 0 if request.param == "compiled" else 10**12)
+    return request.param
 
 
 def _van_der_pol(t, y):
@@ -44,13 +56,15 @@ def test_same_steps_as_scipy_with_rejections():
 
 # accepted at once: all to rounding; rejected first, then shorter by the rejected error estimate
 @pytest.mark.parametrize(("h", "tol"), [(0.05, 1e-14), (0.6, 1e-10)])
-def test_one_step_as_scipy(h, tol):
+@pytest.mark.parametrize("atol", [1e-10, [1e-10, 3e-9]])
+def test_one_step_as_scipy(h, tol, atol, sums):
     """From the same state and step size, one step of each: the same attempts, the same step,
     new state and dense output to rounding (after a rejection, to the rounding of the error
     estimate that shortened it), the same next step size."""
-    kw = dict(rtol=1e-8, atol=1e-10, first_step=h)
+    kw = dict(rtol=1e-8, atol=atol, first_step=h)
     a = DOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, **kw)
     b = InPlaceDOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, into=_into, **kw)
+    assert (b._jit is not None) == (sums == "compiled" and HAVE_NUMBA)
     a.step()
     b.step()
     assert a.nfev == b.nfev
@@ -92,3 +106,19 @@ def test_ring_run_as_scipy(ring, monkeypatch, first_step):
     np.testing.assert_allclose(a.qd, b.qd, rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(a.nc_work, b.nc_work, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(a.nc_work, 2.0 * (a.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)
+
+
+def test_work_node_by_node(ring, monkeypatch):
+    """The work up to reported times inside steps with the dense output asked for one node at
+    a time (long states, pfaff.integrate.work.ONE_NODE_FROM) equals the one call for all four
+    nodes, and F Δx."""
+    from pfaff.integrate import work
+
+    q0, qd0 = pfaff.models.ring_state(64, 0.5, theta=np.pi, theta_dot=0.7)
+    kw = dict(t_eval=[0.0, 0.13, 0.31, 0.5], max_step=0.1)
+    monkeypatch.setattr(inplace, "INPLACE_MIN", 0)
+    a = pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw)
+    monkeypatch.setattr(work, "ONE_NODE_FROM", 1)
+    b = pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw)
+    np.testing.assert_allclose(b.nc_work, a.nc_work, rtol=1e-14, atol=1e-16)
+    np.testing.assert_allclose(b.nc_work, 2.0 * (b.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)

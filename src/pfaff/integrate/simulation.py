@@ -95,6 +95,7 @@ def _t_eval(t_eval: object, t0: float, t1: float) -> np.ndarray | None:
 
 
 MAX_STEPS = 1e9  # a max_step that forces more steps than this is refused (it would not end)
+LAZY_NAMES = 1 << 16  # longer name sequences stay the model's lazy ones in a trajectory
 
 
 def _stepper_class(method: object) -> type[Stepper]:
@@ -755,6 +756,13 @@ def _stacked(rows: list, n: int) -> np.ndarray:
     return out
 
 
+def _names(names) -> list | object:
+    """A model's names as the trajectory keeps them: a list, or the model's own (immutable,
+    lazy) sequence when long (listing the ring's 2^21 names took 3 s of a 1 s run at N = 2^20;
+    a run streamed to a file keeps them lazy too)."""
+    return names if len(names) > LAZY_NAMES else list(names)
+
+
 def _trajectory(model, method, run, status, message, stats, projector, project_output):
     n, m = model.n, model.m
     T = np.array(run.T)
@@ -783,8 +791,8 @@ def _trajectory(model, method, run, status, message, stats, projector, project_o
         status=status,
         message=message,
         method=method,
-        coordinate_names=list(model.coordinate_names),
-        multiplier_names=list(model.multiplier_names),
+        coordinate_names=_names(model.coordinate_names),
+        multiplier_names=_names(model.multiplier_names),
         parameters=dict(model.parameters),
         projector=projector if project_output else None,
         switches=list(run.switches),

@@ -5,7 +5,10 @@ When the band is constant from some row on (a difference constraint θ_{k+1} - �
 a family), the solve is a linear recurrence with constant coefficients: a running sum (NumPy
 ``cumsum``, when L[i, i-1] = -L[i, i]) or an IIR filter (``scipy.signal.lfilter``), both in C and
 several times faster than LAPACK's ``dtbtrs``, which is used otherwise. Measured at N = 2^24 on the
-2-core development machine: cumsum 0.07 s, lfilter 0.14 s, dtbtrs 0.44 s per solve.
+2-core development machine: cumsum 0.07 s, lfilter 0.14 s, dtbtrs 0.44 s per solve. The backward
+running sum of a long band (the multipliers, λ_N first) is one compiled loop (numba, through
+:mod:`pfaff.numeric.jit`) from :data:`JIT_FROM` rows: NumPy's ``cumsum`` of the reversed vector
+took 16.7 ms at 2^22 and the loop 7.0 ms, with the same additions in the same order.
 """
 
 from __future__ import annotations
@@ -17,6 +20,9 @@ import numpy as np
 import scipy.linalg.lapack as lapack
 
 from pfaff.core.errors import ConstraintError
+from pfaff.numeric import jit
+
+JIT_FROM = 1 << 16  # rows from which the backward running sum is one compiled pass
 
 
 @functools.cache
@@ -116,7 +122,10 @@ class LowerBand:
             return self._lapack(c, "T")
         R, w, i0 = self.R, self.w, self.head
         a = R[:, -1]
-        if self.method == "cumsum":  # z_i = c_i / a0 + z_(i+1): a running sum from the end
+        if self.method == "cumsum" and c.ndim == 1 and self.m >= JIT_FROM and _summer():
+            z = np.empty(self.m)  # z_i = c_i / a0 + z_(i+1), in one compiled pass
+            _summer()(c, 1.0 / a[0], z, i0)  # type: ignore[misc]
+        elif self.method == "cumsum":  # z_i = c_i / a0 + z_(i+1): a running sum from the end
             if a[0] == 1.0:  # the ring's spacing rows: no scaling pass
                 rev = np.empty_like(c, dtype=float)
                 np.cumsum(c[::-1][: self.m - i0], axis=0, out=rev[: self.m - i0])  # head: below
@@ -142,6 +151,21 @@ class LowerBand:
         if info != 0:
             self.check()
         return x.reshape(c.shape)
+
+
+def _sum_from_end(c, scale, out, stop):  # type: ignore[no-untyped-def]
+    """out_i = Σ_{j >= i} c_j scale for i >= stop, from the end (NumPy's cumsum of the scaled
+    reversed c, the same additions in the same order)."""
+    total = 0.0
+    for i in range(c.shape[0] - 1, stop - 1, -1):
+        total += c[i] * scale
+        out[i] = total
+
+
+def _summer():  # type: ignore[no-untyped-def]
+    """:func:`_sum_from_end` compiled (:func:`pfaff.numeric.jit.compiled`), or None."""
+    x = np.zeros(1)
+    return jit.compiled(_sum_from_end, (x, 1.0, x, 0))
 
 
 def _columns(x: np.ndarray) -> list[np.ndarray]:

@@ -334,7 +334,6 @@ class StreamModel(Quantities, ModelValue):
         """f, g, the row norms of A and the mass-metric correction M⁻¹Aᵀ(AM⁻¹Aᵀ)⁻¹r: the KKT
         solve with zero forcing, O(N) like every solve (:mod:`pfaff.numeric.projection`)."""
         f, g = self.residual(t, q, qd)
-        mvals, _ = self._dynamics(t, q, qd)
         avals, _ = self._accel_constraints(t, q, qd)
         sq = np.zeros(self.m)
         for part, vals in zip(self.con, avals, strict=True):
@@ -345,8 +344,13 @@ class StreamModel(Quantities, ModelValue):
         mv = view.m  # a left-out row (the closed ring's last) is the last one: its residual
         # follows from the others' where they hold, so the correction is the kept rows'
 
+        mvals: list = []  # M's entries, evaluated by the first correction: a state that
+        # passes the tests (most states a run projects) needs no kernel pass of the dynamics
+
         def correct(r: np.ndarray) -> np.ndarray:
-            system = view._system(mvals, self._zeros(), solved, r[:mv])
+            if not mvals:
+                mvals.append(self._dynamics(t, q, qd)[0])
+            system = view._system(mvals[0], self._zeros(), solved, r[:mv])
             return self._solver.solve(system, multipliers=False)[0]
 
         f = np.where(self.holonomic, f, 0.0)

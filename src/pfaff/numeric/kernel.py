@@ -18,6 +18,8 @@ from pfaff.numeric import streams
 from pfaff.numeric.generated import loaded, portable
 from pfaff.numeric.streams import Index, in_spans, take
 from pfaff.numeric.trig import sincos, workspace
+from pfaff.numeric.trigjit import compiled
+from pfaff.numeric.trigjit import sincos as jit_sincos
 
 
 @dataclass(frozen=True)
@@ -103,6 +105,9 @@ class StreamKernel:
             (c.start if c.fixed else c.whole) if isinstance(c, Index) else c for c in columns
         ]
         self._out: np.ndarray | None = None
+        # trigjit's compiled sin and cos (read at build time: tests change JIT_FROM), loaded by
+        # the first call; None: trig.sincos's NumPy passes
+        self._jit: Callable | bool | None = False if count >= streams.JIT_FROM else None
         self.chunk = (
             streams.CHUNK
         )  # (read at build time: tests change it) instances per call of the generated function
@@ -178,16 +183,22 @@ class StreamKernel:
         return res
 
     def _trig(self, args: list, t_: float, size: int) -> list:
-        """sin and cos of every angle over one chunk, sharing the argument reduction."""
+        """sin and cos of every angle over one chunk, sharing the argument reduction (in one
+        compiled pass when :meth:`__call__` found :mod:`pfaff.numeric.trigjit`'s)."""
         buf = getattr(self._local, "buf", None)
         if buf is None:
             buf = self._local.buf = (np.empty((2 * len(self.angles), self.chunk)), workspace())
-        res = []
+        jit, res = self._jit, []
         for i, a in enumerate(self._angle_fn(*args, t_)):
             if np.ndim(a) == 0:
                 res += [math.sin(a), math.cos(a)]
+                continue
+            s, c = buf[0][2 * i, :size], buf[0][2 * i + 1, :size]
+            if not jit or np.ndim(a) != 1:
+                res += sincos(a, s, c, buf[1])
             else:
-                res += sincos(a, buf[0][2 * i, :size], buf[0][2 * i + 1, :size], buf[1])
+                jit_sincos(jit, np.asarray(a, dtype=float), s, c, buf[1].k)
+                res += [s, c]
         return res
 
     def warm(self) -> None:
@@ -209,6 +220,8 @@ class StreamKernel:
                 return self._direct(t_, q, qd)
             if self._out is None:
                 self._out = np.empty((self._n_stored, self.count))
+            if self.angles and self._jit is False:  # (loaded here: not on a kernel thread)
+                self._jit = compiled()
             in_spans(self.count, self.chunk, lambda lo, hi: self._run(t_, q, qd, lo, hi))
         except (ValueError, ArithmeticError) as e:  # an overflow in the user's equations, ...
             if not raised_in_generated_code(e):

@@ -36,6 +36,7 @@ PARALLEL_FROM = 1 << 20
 # 1304 -> 1349 µs at 2^16 (measured 2026-11-24), so the calls are cut into blocks instead.
 BLAS_BLOCK = 8192
 SINCOS_FROM = 1 << 12  # kernels over this many instances take sin and cos from trig.sincos
+JIT_FROM = 1 << 16  # ... and from this many, in one compiled pass (trigjit: numba loaded once)
 SPAN = 1 << 17  # elements per task of the streaming passes run on the threads (1 MiB)
 _POOL: ThreadPoolExecutor | None = None
 _THREAD = threading.local()
