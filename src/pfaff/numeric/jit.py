@@ -16,6 +16,8 @@ import os
 import threading
 from collections.abc import Callable
 
+from pfaff.core.held import signals_held
+
 _LOCK = threading.Lock()
 _DONE: dict[str, Callable | None] = {}  # per loop (module.name): compiled, or None
 
@@ -61,7 +63,8 @@ def compiled(fn: Callable, *warm: tuple) -> Callable | None:
     key = f"{fn.__module__}.{fn.__qualname__}"
     with _LOCK:
         if key not in _DONE:
-            _DONE[key] = _compile(fn, warm)
+            with signals_held():  # numba could swallow a Ctrl-C while it loads
+                _DONE[key] = _compile(fn, warm)
     return _DONE[key]
 
 
