@@ -131,7 +131,7 @@ def fused_accelerations(
     if fk is None or not isinstance(t, float) or type(q) is not _ARRAY or type(qd) is not _ARRAY:
         return None
     n = model.n  # (a float64 array's dtype is numpy's one float64 descriptor: else the full path)
-    if not (q.dtype is qd.dtype is _FLOAT and q.shape == qd.shape == (n,)):
+    if not (q.dtype is qd.dtype is _FLOAT and q.ndim == qd.ndim == 1 and len(q) == len(qd) == n):
         return None
     if model.evaluator == "machine":
         return _machine_accelerations(model, fk, t, q, qd)
@@ -143,8 +143,7 @@ def fused_accelerations(
         run["afn"] = acc = acc or False
     if not acc:
         return None
-    y = q.tolist()
-    y += qd.tolist()
+    y = q.tolist() + qd.tolist()
     try:  # [q̈, λ, the checks of passes()], inlined below (a µs of a 3 µs call)
         r = acc(t, y, model._p)
     except ArithmeticError:  # (an overflow: the full path names it)
@@ -157,8 +156,7 @@ def fused_accelerations(
         or not _isfinite(sum(r, t + sum(y)))
     ):
         return None
-    out = _array(r)
-    return out[:n], out[n:-3]
+    return _array(r[:n]), _array(r[n:-3])  # (less time than views of one array)
 
 
 def _machine_accelerations(
