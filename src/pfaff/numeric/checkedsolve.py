@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 
+from pfaff.numeric.evaluator import preallocated
 from pfaff.numeric.inertia import M_PIVOT
 from pfaff.numeric.kkt import STATE_FLOOR
 
@@ -130,8 +131,8 @@ def fused_accelerations(
     fk = model._fused
     if fk is None or not isinstance(t, float) or type(q) is not _ARRAY or type(qd) is not _ARRAY:
         return None
-    n = model.n  # (a float64 array's dtype is numpy's one float64 descriptor: else the full path)
-    if not (q.dtype is qd.dtype is _FLOAT and q.ndim == qd.ndim == 1 and len(q) == len(qd) == n):
+    n = model.n  # (an unpickled array's float64 dtype is equal to numpy's, not the same object)
+    if not (q.dtype == qd.dtype == _FLOAT and q.ndim == qd.ndim == 1 and len(q) == len(qd) == n):
         return None
     if model.evaluator == "machine":
         return _machine_accelerations(model, fk, t, q, qd)
@@ -163,7 +164,8 @@ def _machine_accelerations(
     model: NumericModel, fk: object, t: float, q: np.ndarray, qd: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """:func:`fused_accelerations` by the machine code (the evaluator): one call on the run's
-    input buffer."""
+    input buffer, through its unchecked entry point into an output array of the run
+    (:func:`pfaff.numeric.evaluator.preallocated`, as the right-hand side calls it)."""
     if not _isfinite(t + sum(q.tolist()) + sum(qd.tolist())):
         return None
     machine = model._machine()
@@ -175,7 +177,10 @@ def _machine_accelerations(
     if type(p) is not tuple or run.get("p") is not p:  # (a run's inputs change a list)
         buf[1 + 2 * n : 1 + 2 * n + len(p)] = p
         run["p"] = p
-    out = machine(buf)
+    call = run.get("acc_call")
+    if call is None or call[0] is not machine:
+        run["acc_call"] = call = (machine, preallocated(machine, buf))
+    out = call[1]()
     run["last"] = None  # (the full path's cache of a machine solve: not this call's)
     if not passes(*out[-3:].tolist()):
         return None
