@@ -31,6 +31,7 @@ from pfaff.numeric.inertia import M_PIVOT
 from pfaff.numeric.kkt import STATE_FLOOR
 
 if TYPE_CHECKING:
+    from pfaff.numeric.fused import FusedKernel
     from pfaff.numeric.model import NumericModel
 
 _potrf = scipy.linalg.lapack.dpotrf
@@ -161,7 +162,7 @@ def fused_accelerations(
 
 
 def _machine_accelerations(
-    model: NumericModel, fk: object, t: float, q: np.ndarray, qd: np.ndarray
+    model: NumericModel, fk: FusedKernel, t: float, q: np.ndarray, qd: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """:func:`fused_accelerations` by the machine code (the evaluator): one call on the run's
     input buffer, through its unchecked entry point into an output array of the run
@@ -169,7 +170,7 @@ def _machine_accelerations(
     if not _isfinite(t + sum(q.tolist()) + sum(qd.tolist())):
         return None
     machine = model._machine()
-    if machine is None or fk.checks != 3 or not fk.solves:  # type: ignore[attr-defined]
+    if machine is None or fk.checks != 3 or not fk.solves:
         return None
     n, p, run = model.n, model._p, model._run_state
     buf = run["buf"]
@@ -184,7 +185,7 @@ def _machine_accelerations(
     run["last"] = None  # (the full path's cache of a machine solve: not this call's)
     if not passes(*out[-3:].tolist()):
         return None
-    res = out[n : n + n + model.m].copy()
+    res = out[n : 2 * n + model.m].copy()  # (q̈ and λ after q̇)
     if not _isfinite(sum(res.tolist())):
         return None
     return res[:n], res[n:]
