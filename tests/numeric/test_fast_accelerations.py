@@ -177,6 +177,7 @@ def test_bad_states_raise_the_same_errors(evaluator: str) -> None:
         ((0.0, q, np.zeros((2, 1))), r"`qd` must have shape \(2,\)"),
         ((0.0, q + 0j, qd), r"`q` is complex"),
         ((0.0, np.array([True, False]), qd), r"`q` must be an array of 2 real numbers"),
+        ((0.0, q, np.array([1e200, 0.6])), r"not defined at t = 0: a value overflowed"),  # (q̇²)
     ]
     for args, message in cases:
         assert fused_accelerations(model, *args) is None

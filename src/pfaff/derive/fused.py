@@ -461,7 +461,7 @@ def _llvm_factory(eom: Derivation, key: str | None) -> Callable[..., Callable | 
         (mass, acon, exprs, _), args = _parts(eom)  # a failure is reported by MachineCode
         return _llvm_rhs(mass, acon, exprs, eom.n, eom.m, args)
 
-    return cached_machine(key, "llvm-pivots", build)  # (the outputs end with the checks)
+    return cached_machine(key, "llvm-checks", build)  # (the outputs end with the checks)
 
 
 def _kernel_parts(eom: Derivation) -> tuple[list, list]:

@@ -26,7 +26,7 @@ from scipy.integrate import DOP853
 
 from pfaff.integrate.events import SINGULAR
 from pfaff.integrate.fastrk import _EXPONENT, MAX_FACTOR, MIN_FACTOR, SAFETY
-from pfaff.integrate.loopbase import cached, call_entry, copy_into, helper
+from pfaff.integrate.loopbase import cached, call_entry, copy_into, helper, inlined
 from pfaff.integrate.loopproject import project
 from pfaff.integrate.pace import COLLAPSE, EPS, ULPS, WINDOW
 from pfaff.integrate.work import GAUSS_W, GAUSS_X
@@ -63,7 +63,7 @@ TABLEAU = (
 A_, AJ, B_, BJ, C_, E_, EJ, AX, AXJ, CX, D_, GX, GW = range(13)
 
 
-@helper
+@inlined
 def _rhs(fns, rin, rout, t, y, k):
     """k = [q̇, q̈] at (t, y); False where they are not finite (their sum, as
     :func:`pfaff.numeric.evaluator.machine_rhs` tests them)."""
@@ -80,16 +80,28 @@ def _rhs(fns, rin, rout, t, y, k):
     return math.isfinite(total)
 
 
-@helper
+@inlined
 def _combine(y, h, coefs, cols, K, out):
     """out = y + h Σ_j coefs[j] K[cols[j]] over a row's nonzero coefficients (``cols[-1]`` of
-    them), each sum in column order: the sums of FloatDOP853's generated code."""
-    count = cols[cols.size - 1]
-    for i in range(y.size):
-        acc = 0.0
-        for j in range(count):
-            acc += coefs[j] * K[cols[j], i]
-        out[i] = y[i] + h * acc
+    them), each sum in column order: the sums of FloatDOP853's generated code. The components'
+    sums advance together (each one's additions in the same order as alone: the same result),
+    the first term written rather than added to zeros (no call of ``memset``): one sum at a
+    time waited on each addition (an attempt with its 13 right-hand sides of the Cartesian
+    pendulum took about 0.93 µs that way, 0.72 µs this way)."""
+    count, n2 = cols[cols.size - 1], y.size
+    if count == 0:
+        for i in range(n2):
+            out[i] = y[i] + h * 0.0
+        return
+    c, row = coefs[0], cols[0]
+    for i in range(n2):
+        out[i] = 0.0 + c * K[row, i]
+    for j in range(1, count):
+        c, row = coefs[j], cols[j]
+        for i in range(n2):
+            out[i] += c * K[row, i]
+    for i in range(n2):
+        out[i] = y[i] + h * out[i]
 
 
 @helper
@@ -113,12 +125,15 @@ def _error(tab, K, y, yn, atol, rtol, h_abs, a, b):
     E, EJ_ = tab[E_], tab[EJ]
     n2, n5, n3 = y.size, EJ_[0, 13], EJ_[1, 13]
     for i in range(n2):
-        x5 = x3 = 0.0
-        for j in range(n5):
-            x5 += E[0, j] * K[EJ_[0, j], i]
-        for j in range(n3):
-            x3 += E[1, j] * K[EJ_[1, j], i]
-        a[i], b[i] = x5, x3
+        a[i] = b[i] = 0.0
+    for j in range(n5):  # (the components' sums together, as in _combine)
+        c, row = E[0, j], EJ_[0, j]
+        for i in range(n2):
+            a[i] += c * K[row, i]
+    for j in range(n3):
+        c, row = E[1, j], EJ_[1, j]
+        for i in range(n2):
+            b[i] += c * K[row, i]
     s5 = s3 = 0.0
     for i in range(n2):
         sc = atol[i] + max(abs(y[i]), abs(yn[i])) * rtol

@@ -15,18 +15,19 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 
-def helper(fn):
-    """A helper of a cached function: compiled with it (and kept in its cache entry)."""
-    return njit(error_model="numpy")(fn)
+def helper(fn, **options):
+    """A helper of a cached function: compiled with it (and kept in its cache entry);
+    ``options`` are numba's (``inline="always"``, ``_nrt=False``)."""
+    return njit(error_model="numpy", **options)(fn)
 
 
-def cached(fn):
+def cached(fn, **options):
     """``njit`` with numba's on-disk cache (beside the module, or numba's user-wide folder when
     that is read-only, or ``NUMBA_CACHE_DIR``); without it where no folder is writable."""
     try:
-        return njit(cache=True, error_model="numpy")(fn)
+        return njit(cache=True, error_model="numpy", **options)(fn)
     except RuntimeError:  # "no locator available": compiled once per process instead
-        return njit(error_model="numpy")(fn)
+        return njit(error_model="numpy", **options)(fn)
 
 
 @intrinsic

@@ -233,9 +233,12 @@ def schur_source(
 
 def _ratios(w: _Writer) -> list[str]:
     """Each recorded pivot over the size of its diagonal entry. On symbols, the size is
-    sqrt(s·s): SymEngine's ``Abs`` of a large entry made the machine code of the ring of 8 take
-    17 s to build instead of 0.2 s."""
-    size = "sqrt(({0})*({0}))" if w.symbolic else "abs({0})"
+    max(s, 0): the same ratio where s > 0, and where s ≤ 0 the pivot d ≤ s makes it −inf or
+    NaN, which fails as the negative ratio d/|s| does. SymEngine's ``Abs`` of a large entry
+    made the machine code of the ring of 8 take 17 s to build instead of 0.2 s; d/sqrt(s·s)
+    became d·(s²)^(−1/2), a call of ``pow`` that cost the Cartesian pendulum's right-hand side
+    more than the rest of it (two of them, about 40 ns of its 70)."""
+    size = "max({0}, 0.0)" if w.symbolic else "abs({0})"
     return [f"{d} / {size.format(s)}" for d, s in w.pivots or []]
 
 
