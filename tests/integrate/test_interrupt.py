@@ -65,7 +65,8 @@ LONG_RUN = textwrap.dedent(
     import json
     import pfaff
     model = pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
-    print("simulating", flush=True)
+    pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0, 0.01))  # the stepping loop loaded: a
+    print("simulating", flush=True)  # Ctrl-C while it loads ends the run at its first point
     tr = pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0, 1e7))
     print(json.dumps({"status": tr.status, "t": tr.t.tolist(), "r": (tr.q ** 2).sum(1).tolist()}))
     """
