@@ -74,8 +74,10 @@ def _compile(fn: Callable, warm: tuple) -> Callable | None:
     except ImportError:
         return None
     try:
+        from pfaff.numeric.numbacode import fresh
+
         try:
-            out = njit(cache=True, nogil=True, error_model="numpy")(fn)
+            out = fresh(njit(cache=True, nogil=True, error_model="numpy")(fn))
         except RuntimeError:  # no folder for numba's cache: compiled in this process only
             out = njit(nogil=True, error_model="numpy")(fn)
         for args in warm:

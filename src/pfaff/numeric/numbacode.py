@@ -10,6 +10,13 @@ models (:mod:`pfaff.numeric.kernelchol`) and the compiled stepping loop
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
@@ -23,11 +30,64 @@ def helper(fn, **options):
 
 def cached(fn, **options):
     """``njit`` with numba's on-disk cache (beside the module, or numba's user-wide folder when
-    that is read-only, or ``NUMBA_CACHE_DIR``); without it where no folder is writable."""
+    that is read-only, or ``NUMBA_CACHE_DIR``), kept only while pfaff's sources are those it
+    was written from (:func:`fresh`); without it where no folder is writable."""
     try:
-        return njit(cache=True, error_model="numpy", **options)(fn)
+        return fresh(njit(cache=True, error_model="numpy", **options)(fn))
     except RuntimeError:  # "no locator available": compiled once per process instead
         return njit(error_model="numpy", **options)(fn)
+
+
+@functools.cache
+def source_digest() -> str:
+    """SHA-256 of every source file of the installed pfaff (about 5 ms, once per process)."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
+def fresh(dispatcher):
+    """``dispatcher`` (a cached numba function), its cache emptied first if pfaff's sources
+    changed since the cache was written.
+
+    numba keeps a cache entry while the function's own file keeps its time stamp and size and
+    its bytecode is the same: a helper in another module, or a constant imported from one,
+    could change and the old machine code would still be loaded. A file beside the cache
+    records :func:`source_digest` of the sources the entries were made from.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> def double(x):
+    ...     return 2.0 * x
+    >>> f = fresh(njit(double))  # (no cache: nothing to check)
+    >>> f(2.0)
+    4.0
+    """
+    cache = getattr(dispatcher, "_cache", None)
+    folder = getattr(cache, "_cache_path", None)
+    if folder is None:  # no cache (or a numba whose cache this cannot read): nothing to check
+        return dispatcher
+    fn = dispatcher.py_func
+    stamp = Path(folder) / f"{fn.__module__}.{fn.__qualname__}.pfaff-sources"
+    digest = source_digest()
+    with contextlib.suppress(OSError):
+        if stamp.read_text() == digest:
+            return dispatcher
+    cache.flush()  # machine code of other sources: compiled anew
+    with contextlib.suppress(OSError):  # (a folder numba cannot write either: no cache)
+        os.makedirs(folder, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".pfaff-sources.")
+        try:
+            with os.fdopen(fd, "w") as fh:
+                fh.write(digest)
+            os.replace(tmp, stamp)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+    return dispatcher
 
 
 @intrinsic

@@ -1,0 +1,49 @@
+"""numba's on-disk cache is kept only while pfaff's sources are those it was written from
+(:func:`pfaff.numeric.numbacode.fresh`): numba itself checks only the function's own file."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+numbacode = pytest.importorskip("pfaff.numeric.numbacode")  # (numba)
+from numba import njit  # noqa: E402
+
+
+def _function(folder: Path):
+    """A function in a module file of its own (numba caches beside it)."""
+    path = folder / "cached_twice.py"
+    path.write_text("def twice(x):\n    return 2.0 * x\n")
+    spec = importlib.util.spec_from_file_location("cached_twice", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["cached_twice"] = module
+    spec.loader.exec_module(module)
+    return module.twice
+
+
+def _hits(fn) -> tuple[int, int]:
+    """(cache hits, cache misses) of one call of a fresh dispatcher of ``fn``."""
+    d = numbacode.fresh(njit(cache=True)(fn))
+    assert d(1.5) == 3.0
+    return sum(d.stats.cache_hits.values()), sum(d.stats.cache_misses.values())
+
+
+def test_the_cache_is_emptied_when_the_sources_change(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    fn = _function(tmp_path)
+    try:
+        assert _hits(fn) == (0, 1)  # compiled and saved
+        stamps = list((tmp_path / "__pycache__").glob("*.pfaff-sources"))
+        assert [p.read_text() for p in stamps] == [numbacode.source_digest()]
+        assert _hits(fn) == (1, 0)  # the same sources: loaded
+        monkeypatch.setattr(numbacode, "source_digest", lambda: "other sources")
+        assert _hits(fn) == (0, 1)  # other sources: compiled anew, not loaded
+        assert stamps[0].read_text() == "other sources"
+        assert _hits(fn) == (1, 0)
+    finally:
+        sys.modules.pop("cached_twice", None)
