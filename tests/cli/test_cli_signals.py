@@ -56,6 +56,37 @@ def test_during_derivation_every_command_ends_in_one_line(
     assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL  # handlers given back
 
 
+class _Finalized:
+    """An object whose finalizer is where the signal's KeyboardInterrupt lands: Python prints
+    it ("Exception ignored") and drops it, as inside a library's callback."""
+
+    def __init__(self, sig: int) -> None:
+        self.sig = sig
+
+    def __del__(self) -> None:
+        signal.raise_signal(self.sig)  # the handler runs here, in the finalizer
+
+
+@pytest.mark.parametrize(("sig", "code", "word"), SIGNALS)
+def test_a_signal_a_library_swallowed_still_ends_the_command(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], sig, code, word
+) -> None:
+    """The interrupt raised inside a finalizer is dropped and `equations` runs to its end; the
+    signal was received, so the command reports it (one line, 130/143) instead of exit 0."""
+    real = pfaff.System.equations
+
+    def patched(*args, **kwargs):
+        _Finalized(sig)  # made and dropped at once: its finalizer swallows the interrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(pfaff.System, "equations", patched)
+    assert main(["equations", EXAMPLE]) == code
+    err = capsys.readouterr().err
+    assert err.strip().splitlines()[-1] == f"pfaff: {word}"
+    monkeypatch.undo()
+    assert main(["equations", EXAMPLE]) == 0  # (a later command: its own signals only)
+
+
 @pytest.mark.parametrize(("sig", "code", "word"), SIGNALS)
 def test_during_a_write_the_old_file_stays(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path, sig, code, word

@@ -21,7 +21,7 @@ from pathlib import Path
 from pfaff.cli.argtypes import finite, not_an_input, positive, whole
 from pfaff.cli.jsontext import dumps
 from pfaff.cli.report import fail, guarded
-from pfaff.cli.signals import interrupted, interrupts, signalled, stage
+from pfaff.cli.signals import forget, interrupted, interrupts, signalled, stage, swallowed
 from pfaff.core.errors import OptionError
 
 # the simulation options imply --simulate when given; these are their defaults
@@ -414,9 +414,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         shows the traceback), 2 a usage, model, value or file error, 3 a simulation that failed or
         was interrupted, 130 interrupted (Ctrl-C) before a simulation.
     """
+    forget()
     try:  # from the start: the parser imports the stages (seconds), an interrupt there is one line
         with interrupts():
-            return _main(argv)
+            code = _main(argv)
+            if (lost := swallowed(code)) is not None:  # received, and dropped by a library
+                return fail(*lost, False)
+            return code
     except KeyboardInterrupt as e:  # (a command's own interrupts are reported by `guarded`)
         return fail(*interrupted(e), False)
     except Exception as e:

@@ -38,7 +38,6 @@ def interrupts() -> Iterator[None]:
         yield
         return
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
-    _RECEIVED.clear()  # (a command run in this process before: its signals are its own)
     signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _terminate)
     try:
@@ -46,6 +45,30 @@ def interrupts() -> Iterator[None]:
     finally:
         signal.signal(signal.SIGINT, before[0])
         signal.signal(signal.SIGTERM, before[1])
+
+
+def forget() -> None:
+    """Start a command afresh: the signals of a command run before in this process are its own."""
+    _RECEIVED.clear()
+
+
+def swallowed(code: int) -> tuple[str, int] | None:
+    """The one line and exit code of an interrupt that a library swallowed, when a command
+    that received SIGINT or SIGTERM still ended with ``code`` 0; else None.
+
+    Python raises the handler's ``KeyboardInterrupt`` wherever the main thread is, and inside
+    a finalizer or a C extension's callback it is printed and dropped ("Exception ignored"):
+    the signal was received, so the command ends as interrupted all the same.
+
+    Examples
+    --------
+    >>> forget()
+    >>> swallowed(0) is None
+    True
+    """
+    if code != 0 or not _RECEIVED:
+        return None
+    return interrupted(Terminated() if _RECEIVED[-1] == signal.SIGTERM else KeyboardInterrupt())
 
 
 def _interrupt(signum: int, frame: FrameType | None) -> None:
