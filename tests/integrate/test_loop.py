@@ -18,6 +18,7 @@ import sympy as sp
 
 import pfaff
 from pfaff.integrate import loop
+from pfaff.numeric import jit
 
 CHAIN = 8  # links of the chain on a cart
 
@@ -187,7 +188,7 @@ def test_without_numba(pendulum: pfaff.NumericModel, monkeypatch: pytest.MonkeyP
     """numba missing (its import fails): the Python path, saying why, with the same results."""
     te = np.linspace(0.0, 3.0, 7)
     a = pfaff.simulate(pendulum, [1.0, 0.0], [0.0, 0.0], (0, 3), t_eval=te)
-    monkeypatch.setattr(loop, "_KERNEL", [])
+    monkeypatch.delitem(jit._MODULES, "loopkernel")  # (loaded once per process: forgotten)
     monkeypatch.delattr(pfaff.integrate, "loopkernel", raising=False)
     monkeypatch.setitem(sys.modules, "pfaff.integrate.loopkernel", None)  # import fails
     b = pfaff.simulate(pendulum, [1.0, 0.0], [0.0, 0.0], (0, 3), t_eval=te)

@@ -31,41 +31,32 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pfaff.core.held import signals_held
 from pfaff.integrate.integrators import ProjectedRK
 from pfaff.integrate.reach import UNREACHED
 from pfaff.integrate.stepper import _RunFailure
+from pfaff.numeric.jit import loaded
 
 if TYPE_CHECKING:
     from pfaff.numeric.machineloop import LoopCode
 
-_KERNEL: list = []  # the kernel module once imported, or why it cannot be (once per process)
 
-
-def _kernel() -> tuple[Any, str]:
-    """The kernel module (numba code, compiled or loaded now), or None and the reason."""
+def _kernel() -> tuple[Any, str, float]:
+    """The kernel module (numba code, compiled or loaded now, once per process), or None and
+    the reason; and the CPU seconds its load took (:func:`pfaff.numeric.jit.loaded`)."""
     if os.environ.get("PFAFF_LOOP", "1").strip().lower() in ("0", "false", "no", "off"):
-        return None, "PFAFF_LOOP=0"
-    if not _KERNEL:
-        start = time.process_time()
-        with signals_held():
-            try:
-                from pfaff.integrate import loopkernel
+        return None, "PFAFF_LOOP=0", 0.0
+    return loaded("loopkernel", _load_kernel)
 
-                _warm(loopkernel)
-                _KERNEL.append(loopkernel)
-            except ImportError:
-                _KERNEL.append("numba is not installed")
-            except Exception as e:  # numba could not compile it: the Python path (the reason)
-                _KERNEL.append(f"numba failed ({type(e).__name__}: {str(e)[:120]})")
-            _KERNEL.append(time.process_time() - start)
-    kernel = _KERNEL[0]
-    return (None, kernel) if isinstance(kernel, str) else (kernel, "")
+
+def _load_kernel() -> Any:
+    from pfaff.integrate import loopkernel
+
+    _warm(loopkernel)
+    return loopkernel
 
 
 CHUNK = 4096  # steps per call at most: between calls the driver sees Ctrl-C and max_seconds
@@ -217,12 +208,12 @@ def compiled_loop(run: Any, model: Any) -> tuple[CompiledLoop | None, str]:
     make = getattr(model, "machine_loop", None)
     if make is None:
         return None, "the model has no machine code for the loop"
-    kernel, reason = _kernel()
+    kernel, reason, seconds = _kernel()
     if kernel is None:
         return None, reason
     timings = getattr(model, "timings", None)
     if isinstance(timings, dict) and "compiled_loop" not in timings:
-        timings["compiled_loop"] = _KERNEL[1]
+        timings["compiled_loop"] = seconds
     code, reason = make(st.fun)
     if code is None:
         return None, reason

@@ -24,7 +24,6 @@ the interchanges this matrix needs, ku without) for the solves, which are bound 
 
 from __future__ import annotations
 
-import functools
 from types import ModuleType
 
 import numpy as np
@@ -32,7 +31,7 @@ import scipy.linalg as sla
 import scipy.linalg.lapack as lapack
 import scipy.sparse as sps
 
-from pfaff.core.held import signals_held
+from pfaff.numeric.jit import loaded
 
 MAX_BAND = 32  # kl + ku beyond which the band is not worth it (SuperLU instead)
 MAX_BORDER = 16  # dense rows and columns at most
@@ -248,29 +247,24 @@ class BorderedBand:
         return b
 
 
-@functools.cache
 def _kernels() -> ModuleType | None:
-    """:mod:`pfaff.numeric.bandlu`, compiled (or loaded from numba's cache) on first use; None
-    where numba cannot (LAPACK then). Ctrl-C and SIGTERM wait for the load (numba could
-    swallow them)."""
-    with signals_held():
-        return _loaded()
+    """:mod:`pfaff.numeric.bandlu`, compiled (or loaded from numba's cache) on first use
+    (:func:`pfaff.numeric.jit.loaded`); None where numba cannot (LAPACK's routines then do
+    the same)."""
+    return loaded("bandlu", _load_bandlu)[0]
 
 
-def _loaded() -> ModuleType | None:
-    try:
-        from pfaff.numeric import bandlu
+def _load_bandlu() -> ModuleType:
+    from pfaff.numeric import bandlu
 
-        # one call of each with the argument types of the runs (IDA's vectors are read-only)
-        ab, piv, one = np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.ones(1)
-        fixed = np.ones(1)
-        fixed.flags.writeable = False
-        bandlu.band_factor(ab, 0, 0, piv)
-        bandlu.band_split(ab, 0, 0, ab[:, :0], ab)
-        bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
-        bandlu.sum_into(one, piv, one)
-        bandlu.gather(one, fixed, piv)
-        bandlu.scatter_border(one, one, ab, one, piv, piv, piv)
-    except Exception:  # (numba missing or failing: LAPACK's routines do the same)
-        return None
+    # one call of each with the argument types of the runs (IDA's vectors are read-only)
+    ab, piv, one = np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.ones(1)
+    fixed = np.ones(1)
+    fixed.flags.writeable = False
+    bandlu.band_factor(ab, 0, 0, piv)
+    bandlu.band_split(ab, 0, 0, ab[:, :0], ab)
+    bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
+    bandlu.sum_into(one, piv, one)
+    bandlu.gather(one, fixed, piv)
+    bandlu.scatter_border(one, one, ab, one, piv, piv, piv)
     return bandlu

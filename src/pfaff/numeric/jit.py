@@ -14,12 +14,16 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Callable
+from types import ModuleType
 
 from pfaff.core.held import signals_held
 
 _LOCK = threading.Lock()
 _DONE: dict[str, Callable | None] = {}  # per loop (module.name): compiled, or None
+_MODULES_LOCK = threading.RLock()
+_MODULES: dict[str, tuple[ModuleType | None, str, float]] = {}  # per module: see loaded()
 
 
 def enabled() -> bool:
@@ -70,18 +74,48 @@ def compiled(fn: Callable, *warm: tuple) -> Callable | None:
 
 def _compile(fn: Callable, warm: tuple) -> Callable | None:
     try:
-        from numba import njit
+        from pfaff.numeric.numbacode import cached
     except ImportError:
         return None
     try:
-        from pfaff.numeric.numbacode import fresh
-
-        try:
-            out = fresh(njit(cache=True, nogil=True, error_model="numpy")(fn))
-        except RuntimeError:  # no folder for numba's cache: compiled in this process only
-            out = njit(nogil=True, error_model="numpy")(fn)
+        out = cached(fn, nogil=True)
         for args in warm:
             out(*args)
         return out
     except Exception:  # numba could not compile it: the caller's NumPy passes
         return None
+
+
+def loaded(name: str, load: Callable[[], ModuleType]) -> tuple[ModuleType | None, str, float]:
+    """A module of numba code, imported and warmed by ``load()`` once per process with Ctrl-C
+    and SIGTERM held (numba could swallow them): (the module, "", CPU seconds), or (None, why,
+    CPU seconds) where numba is missing or fails (the caller then keeps its other path).
+
+    Parameters
+    ----------
+    name : str
+        The key of this module (the same ``load`` each time).
+    load : callable
+        Imports the module and compiles its functions (or loads them from numba's cache) for
+        the argument types of its callers; returns the module.
+
+    Examples
+    --------
+    >>> import math
+    >>> loaded("math", lambda: math)[:2] == (math, "")
+    True
+    >>> loaded("nothing", lambda: __import__("no_such_module"))[:2]
+    (None, 'numba is not installed')
+    """
+    with _MODULES_LOCK:
+        if name not in _MODULES:
+            start = time.process_time()
+            with signals_held():
+                try:
+                    module, why = load(), ""
+                except ImportError:
+                    module, why = None, "numba is not installed"
+                except Exception as e:  # numba could not compile it
+                    module, why = None, f"numba failed ({type(e).__name__}: {str(e)[:120]})"
+            _MODULES[name] = (module, why, time.process_time() - start)
+        return _MODULES[name]

@@ -17,7 +17,6 @@ the kernel called through its unchecked entry point into a preallocated array
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -25,15 +24,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 
-from pfaff.core.held import signals_held
 from pfaff.numeric.evaluator import preallocated
+from pfaff.numeric.jit import loaded
 from pfaff.numeric.kkt import solve_floored
 from pfaff.numeric.machineloop import entry_point
 
 _posv = scipy.linalg.lapack.dposv
 _ppsv = scipy.linalg.lapack.dppsv
 PACKED_LIMIT = 48  # n up to which a dense M is solved in packed storage (``dppsv``)
-_SOLVER: list = []  # kernelchol (or None) and the CPU seconds of its load: once per process
 
 if TYPE_CHECKING:
     from pfaff.numeric.fused import FusedKernel
@@ -171,20 +169,18 @@ def _compiled_rhs(
 
 def compiled_solver() -> tuple[ModuleType | None, float]:
     """:mod:`pfaff.numeric.kernelchol` with its function compiled or loaded from numba's cache
-    (once per process), or None where numba is missing or fails (the model then solves with
-    SciPy's LAPACK wrappers); and the CPU seconds that took (``timings["compiled_solve"]``)."""
-    if not _SOLVER:
-        start = time.process_time()
-        with signals_held():  # numba could swallow a Ctrl-C
-            try:
-                from pfaff.numeric import kernelchol
+    (once per process, :func:`pfaff.numeric.jit.loaded`), or None where numba is missing or
+    fails (the model then solves with SciPy's LAPACK wrappers); and the CPU seconds that took
+    (``timings["compiled_solve"]``)."""
+    module, _, seconds = loaded("kernelchol", _load_kernelchol)
+    return module, seconds
 
-                kernelchol.warm()
-                _SOLVER.append(kernelchol)
-            except Exception:  # ImportError (no numba) or numba's own: the LAPACK path
-                _SOLVER.append(None)
-        _SOLVER.append(time.process_time() - start)
-    return _SOLVER[0], _SOLVER[1]
+
+def _load_kernelchol() -> ModuleType:
+    from pfaff.numeric import kernelchol
+
+    kernelchol.warm()
+    return kernelchol
 
 
 def _entry_points(compiled: Callable) -> list[tuple[int, int, int]] | None:
