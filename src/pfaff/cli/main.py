@@ -427,6 +427,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if (stopped := signalled(e)) is None:  # an interrupt turned into another error, or a bug
             raise
         return fail(*stopped, False)
+    finally:
+        forget()  # (this command's signals are its own: none are left for a later one)
 
 
 def _main(argv: Sequence[str] | None) -> int:

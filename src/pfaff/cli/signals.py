@@ -66,7 +66,12 @@ def swallowed(code: int) -> tuple[str, int] | None:
     >>> swallowed(0) is None
     True
     """
-    if code != 0 or not _RECEIVED:
+    return _last_received() if code == 0 else None
+
+
+def _last_received() -> tuple[str, int] | None:
+    """The one line and exit code of the last signal the handlers raised on, or None."""
+    if not _RECEIVED:
         return None
     return interrupted(Terminated() if _RECEIVED[-1] == signal.SIGTERM else KeyboardInterrupt())
 
@@ -93,9 +98,7 @@ def signalled(e: BaseException) -> tuple[str, int] | None:
     """
     if isinstance(e, KeyboardInterrupt):
         return interrupted(e)
-    if not _RECEIVED:
-        return None
-    return interrupted(Terminated() if _RECEIVED[-1] == signal.SIGTERM else KeyboardInterrupt())
+    return _last_received()
 
 
 def interrupted(e: KeyboardInterrupt) -> tuple[str, int]:

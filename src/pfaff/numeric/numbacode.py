@@ -3,8 +3,10 @@
 ``cached`` and ``helper`` (numba's compilation of a function, with or without its own entry in
 numba's on-disk cache) and ``call_entry`` (a call through a C entry point
 ``void *f(double *out, const double *in, void *data)``, SymEngine's LLVM functions':
-:func:`pfaff.numeric.machineloop.entry_point`). Used by the compiled right-hand side of mid-size
-models (:mod:`pfaff.numeric.kernelchol`) and the compiled stepping loop
+:func:`pfaff.numeric.machineloop.entry_point`); ``fresh`` (a cache entry dropped when pfaff's
+sources changed). Used by the compiled right-hand side of mid-size models
+(:mod:`pfaff.numeric.kernelchol`), the band LU (:mod:`pfaff.numeric.bandlu`), the compiled
+passes of long arrays (:mod:`pfaff.numeric.jit`) and the compiled stepping loop
 (:mod:`pfaff.integrate.loopkernel`).
 """
 
@@ -59,7 +61,6 @@ def fresh(dispatcher):
 
     Examples
     --------
-    >>> import numpy as np
     >>> def double(x):
     ...     return 2.0 * x
     >>> f = fresh(njit(double))  # (no cache: nothing to check)
