@@ -226,3 +226,26 @@ def test_ctrl_c_keeps_what_the_loop_recorded(
     assert tr.status == "interrupted" and tr.stats["stepping"] == "compiled loop"
     assert len(tr.t) == tr.stats["steps"] + 1 > 2 and tr.t[-1] < 50
     assert np.abs(tr.constraint_residual).max() <= 1e-10
+
+
+def test_a_shipped_model_steps_in_the_loop(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A model pickled right after it is compiled (how a sweep ships it to its workers) steps in
+    the compiled loop, as the model it was pickled from does, with the same results: the
+    pushed chain (the loop's work integral) and the pendulum (its constraint code)."""
+    import pickle
+
+    eom = pfaff.models.n_link_pendulum_on_cart(2).equations()
+    values = {str(p): 1.0 + 0.05 * i for i, p in enumerate(eom.parameters)}
+    cases = [
+        (eom.compile(values | {"g": 9.81, "F": 0.7}), [0.0, 0.3, 0.5], [0.0, 0.0, 0.0]),
+        (pfaff.models.cartesian_pendulum().equations().compile({"m": 1, "g": 9.81, "L": 2}),
+         [2.0, 0.0], [0.0, 0.0]),
+    ]  # fmt: skip
+    te = np.linspace(0.0, 2.0, 5)
+    for model, q0, qd0 in cases:
+        shipped = pickle.loads(pickle.dumps(model, protocol=pickle.HIGHEST_PROTOCOL))
+        a, b = both(monkeypatch, shipped, q0, qd0, (0, 2), t_eval=te)
+        agree(a, b)
+        c = pfaff.simulate(model, q0, qd0, (0, 2), t_eval=te)
+        assert c.stats["stepping"] == "compiled loop"
+        np.testing.assert_allclose(a.q, c.q, rtol=1e-12, atol=1e-12)

@@ -25,6 +25,7 @@ from pfaff.derive.engine import engine_safe
 from pfaff.derive.fusedpower import power_expression
 from pfaff.derive.loopcode import loop_factory
 from pfaff.derive.machine_kernel import cached_machine, kernel_factory
+from pfaff.numeric.checkedsolve import PASS
 from pfaff.numeric.fused import FusedKernel
 from pfaff.numeric.generated import Portable, register
 from pfaff.numeric.smallsolve import NAMESPACE, schur_expressions, schur_solver, schur_source
@@ -527,9 +528,9 @@ def _rhs_function(
     the added terms equal) and a positive definite matrix where M is definite on null(A); ρ is
     the argument ``_rho`` of ``make`` after the floor's.
 
-    ``checked`` (``afn``, for a checked ``accelerations()``): ``acc(t, y, params)`` returns
-    q̈, λ and the checks of :func:`pfaff.numeric.smallsolve.schur_source` (a list), without
-    stabilization or floor, or None where M is not positive definite or S is singular."""
+    ``checked`` (``afn``, for a checked ``accelerations()``): ``acc(t, q, q̇, params)`` returns
+    (q̈, λ) as lists, without stabilization or floor, or None where a check of
+    :func:`pfaff.numeric.smallsolve.schur_source` fails (:func:`_checked_function`)."""
     nM, nA = len(mass), len(acon)
     off = nM + nA
     Ms, As = [f"_m{k}" for k in range(nM)], [f"_a{k}" for k in range(nA)]
@@ -580,22 +581,40 @@ def _checked_function(
     params: list[str],
 ) -> Callable | None:  # fmt: skip
     """``afn`` (see :func:`_rhs_function`): the kernel, c = −(Ȧq̇ + ḃ) (α = β = 0) and the
-    unfloored Schur solve, returning [q̈, λ, checks] or None."""
+    unfloored Schur solve, ``acc(t, q: list, q̇: list, params) -> ([q̈], [λ])``, or None where a
+    check of :func:`pfaff.numeric.checkedsolve.passes` fails, a value is out of its domain or
+    overflows, or anything (t, q, q̇, q̈, λ) is not finite: the checks, the finiteness test and
+    the split into q̈ and λ run here, on local floats (issue 25: ``accelerations()`` within 2×
+    a right-hand side). ``acc(..., _raw=True)`` returns [q̈, λ, checks] unchecked."""
     lam: list[str] = []
     checks: list[str] = []
     schur, out = schur_source(
         mass, acon, *names, prefix="_v", multipliers=lam, checks=checks
     )  # fmt: skip
+    n = len(out)
+    qs, qds = ys.split(", ")[:n], ys.split(", ")[n:]
+    results = [f"_r{i}" for i in range(len(out) + len(lam))]
+    every = ["_t", *qs, *qds, *results]
+    passed = " and ".join(f"({c}) > {bound}" for c, bound in zip(checks, PASS, strict=True))
     src = "\n".join(
         [
-            "def acc(_t, _y, _p):",
-            f"    {ys}, = _y",
+            "def acc(_t, _q, _qd, _p, _raw=False):",
+            f"    {''.join(x + ', ' for x in qs)}= _q",
+            f"    {''.join(x + ', ' for x in qds)}= _qd",
             f"    {''.join(p + ', ' for p in params)}= _p" if params else "",
             "    try:",
             *[f"        {ln}" for ln in body + lines + [x.strip() for x in schur]],
-            "    except (ValueError, ZeroDivisionError):",
+            *[f"        {r} = {e}" for r, e in zip(results, out + lam, strict=True)],
+            "        if _raw:",
+            f"            return [{', '.join(results + checks)}]",
+            f"        if not ({passed}):",
+            "            return None",
+            f"        _s = {' + '.join(every)}",
+            "    except (ValueError, ArithmeticError):",
             "        return None",
-            f"    return [{', '.join(out + lam + checks)}]",
+            "    if _s - _s != 0.0:  # (NaN or infinity somewhere)",
+            "        return None",
+            f"    return [{', '.join(results[:n])}], [{', '.join(results[n:])}]",
         ]
     )
     namespace = {**MATH, **NAMESPACE, "min": min, "max": max}

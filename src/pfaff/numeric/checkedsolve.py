@@ -31,6 +31,8 @@ from pfaff.numeric.inertia import M_PIVOT
 from pfaff.numeric.kkt import STATE_FLOOR
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from pfaff.numeric.fused import FusedKernel
     from pfaff.numeric.model import NumericModel
 
@@ -40,6 +42,7 @@ _trtrs = scipy.linalg.lapack.dtrtrs
 CLEAR = 1e-8  # a Schur pivot (unit diagonal) above this: no floor, no inconsistency to find
 SPREAD = 1e-8  # diagonal entries of S this far apart: the floor's own row scaling decides
 _SCHUR = max(CLEAR, STATE_FLOOR)
+PASS = (M_PIVOT, _SCHUR, SPREAD)  # the bounds of passes(), as the generated afn tests them
 
 
 def checked_solve(
@@ -127,38 +130,53 @@ def fused_accelerations(
     (issue 25: ``accelerations()`` was 7–34× a right-hand side, ``benchmarks/accelerations.py``).
     Only a plain state is taken here (a finite float t, finite float64 arrays of shape (n,));
     anything else is None too: the full path's :func:`pfaff.numeric.checks.check_state` then
-    accepts it or names what is wrong.
+    accepts it or names what is wrong. The function that answers is made once per model
+    (:func:`fast_accelerations`) and kept in its run state.
     """
-    fk = model._fused
-    if fk is None or not isinstance(t, float) or type(q) is not _ARRAY or type(qd) is not _ARRAY:
-        return None
-    n = model.n  # (an unpickled array's float64 dtype is equal to numpy's, not the same object)
-    if not (q.dtype == qd.dtype == _FLOAT and q.ndim == qd.ndim == 1 and len(q) == len(qd) == n):
-        return None
-    if model.evaluator == "machine":
-        return _machine_accelerations(model, fk, t, q, qd)
     run = model._run_state
-    acc = run.get("afn")
-    if acc is None:  # (no rfn: the generated solve disagreed with the array solve when checked)
-        make = getattr(fk.afn, "function", None)
-        acc = (make() if make is not None else fk.afn) if fk.rfn is not None else None
-        run["afn"] = acc = acc or False
-    if not acc:
+    fast = run.get("fast")
+    if fast is None:
+        run["fast"] = fast = fast_accelerations(model) or False
+    return fast(t, q, qd) if fast else None
+
+
+def fast_accelerations(model: NumericModel) -> Callable | None:
+    """``fast(t, q, q̇) -> (q̈, λ) or None`` of :func:`fused_accelerations` for ``model`` (its
+    evaluator as it is now: a model that changes it drops the one kept), or None where it has
+    no generated solve."""
+    fk = model._fused
+    if fk is None:
         return None
-    y = q.tolist() + qd.tolist()
-    try:  # [q̈, λ, the checks of passes()], inlined below (a µs of a 3 µs call)
-        r = acc(t, y, model._p)
-    except ArithmeticError:  # (an overflow: the full path names it)
+    shape = (model.n,)  # (an unpickled array's float64 dtype is equal to numpy's, not the same)
+
+    def plain(t: object, q: object, qd: object) -> bool:
+        return (
+            type(t) is float and type(q) is _ARRAY and type(qd) is _ARRAY
+            and q.dtype == qd.dtype == _FLOAT and q.shape == qd.shape == shape
+        )  # fmt: skip
+
+    if model.evaluator == "machine":
+        return lambda t, q, qd: (
+            _machine_accelerations(model, fk, t, q, qd) if plain(t, q, qd) else None
+        )
+    if fk.rfn is None:  # (no rfn: the generated solve disagreed with the array solve when checked)
         return None
-    # a non-finite input makes the sum non-finite: the state's error comes from the full path
-    # (the generated code catches its own domain errors), as from a non-finite result
-    if (
-        r is None
-        or not (r[-3] > M_PIVOT and r[-2] > _SCHUR and r[-1] > SPREAD)
-        or not _isfinite(sum(r, t + sum(y)))
-    ):
+    make = getattr(fk.afn, "function", None)
+    acc = make() if make is not None else fk.afn
+    if acc is None:
         return None
-    return _array(r[:n]), _array(r[n:-3])  # (less time than views of one array)
+
+    def fast(t: object, q: object, qd: object) -> tuple[np.ndarray, np.ndarray] | None:
+        if not (
+            type(t) is float and type(q) is _ARRAY and type(qd) is _ARRAY
+            and q.dtype == qd.dtype == _FLOAT and q.shape == qd.shape == shape
+        ):  # fmt: skip
+            return None
+        # checks, finiteness (of t, q, q̇, q̈ and λ) and domain errors are the generated code's
+        r = acc(t, q.tolist(), qd.tolist(), model._p)
+        return None if r is None else (_array(r[0]), _array(r[1]))
+
+    return fast
 
 
 def _machine_accelerations(

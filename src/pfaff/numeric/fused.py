@@ -76,8 +76,8 @@ class FusedKernel:
         (:mod:`pfaff.derive.fusedpower`), generated on its first call; ``pfn.function()``
         (before it is pickled) makes it and returns it, or None when it cannot be made.
     afn : callable or None
-        ``afn(t, y: list, params) -> [q̈, λ, checks]`` or None: a checked ``accelerations()``
-        on the generated Python (:func:`pfaff.numeric.checkedsolve.fused_accelerations`);
+        ``afn(t, q: list, q̇: list, params) -> ([q̈], [λ])`` or None (a check failed, a value
+        not finite): a checked ``accelerations()`` on the generated Python (:func:`pfaff.numeric.checkedsolve.fused_accelerations`);
         generated on its first call.
     checks : int
         How many pivot checks end the machine code's outputs (3, or 0 for machine code made
@@ -85,7 +85,8 @@ class FusedKernel:
     loop : callable or None
         ``loop(build=True) -> (con, power)``: the machine code the compiled stepping loop calls
         besides ``llvm`` (:mod:`pfaff.derive.loopcode`), made on first call and cached like it;
-        None above ``FUSED_LIMIT``. It travels as ``llvm`` does (not pickled).
+        None above ``FUSED_LIMIT``. Pickled, it travels made when it was made before (the
+        model's pickle makes it where it has machine code: :class:`MadeLoop`), else as None.
     """
 
     fn: Callable
@@ -114,7 +115,9 @@ class FusedKernel:
         state = dict(self.__dict__)
         for key in _FUNCTIONS:
             state[key] = portable(state[key])
-        state["llvm"] = state["loop"] = None
+        state["llvm"] = None
+        made = self.loop(build=False) if self.loop is not None else None
+        state["loop"] = MadeLoop(made) if made is not None else None
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -125,6 +128,26 @@ class FusedKernel:
     def entries(self, K: np.ndarray) -> list[float]:
         """The M and A entries of an assembled K, as the arguments of ``cfn``."""
         return K.flat[self.entry_index].tolist()
+
+
+class MadeLoop:
+    """``loop`` of an unpickled :class:`FusedKernel`: the loop's machine code as it was made
+    (SymEngine's LLVM functions pickle as their compiled code), so that a shipped model (a
+    sweep's) steps in the compiled loop as the one it was pickled from.
+
+    Examples
+    --------
+    >>> import pickle
+    >>> loop = pickle.loads(pickle.dumps(MadeLoop((None, None))))
+    >>> loop(), loop(build=False)
+    ((None, None), (None, None))
+    """
+
+    def __init__(self, made: tuple) -> None:
+        self.made = made
+
+    def __call__(self, build: bool = True) -> tuple:
+        return self.made
 
 
 class FusedLinearization(ConstraintLinearization):

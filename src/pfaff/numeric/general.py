@@ -8,6 +8,7 @@ for a run and after unpickling. The evaluation itself is in :mod:`pfaff.numeric.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -143,7 +144,8 @@ class GeneralParts:
     def _record_machine(self, mc: MachineCode) -> None:
         """The machine code's kind and cost in ``timings``: ``machine_code`` (CPU seconds to
         build or load it), ``machine_kind`` (``"rhs"``: the whole right-hand side;
-        ``"kernel+LAPACK"``: the kernel alone) and, for the latter, ``machine_opt_level`` and
+        ``"kernel+LAPACK"``: the kernel alone, solved by LAPACK; ``"kernel+numba"`` once a
+        right-hand side solves it in numba's compiled Cholesky, :mod:`pfaff.numeric.kernelchol`) and, for the latter, ``machine_opt_level`` and
         ``machine_functions`` (the LLVM functions it is split into)."""
         fk = self._fused_kernel
         timings = self.timings  # type: ignore[attr-defined]
@@ -218,6 +220,7 @@ class GeneralParts:
             return False
         before = self.evaluator  # type: ignore[has-type]
         object.__setattr__(self, "evaluator", "machine")
+        self._run_state.pop("fast", None)  # (accelerations()' fast path: the old evaluator's)
         if self._machine() is None:  # the build failed (warned): the model stays as it was
             object.__setattr__(self, "evaluator", before)
             return False
@@ -241,7 +244,15 @@ class GeneralParts:
         d["_solver"], d["_lu"] = general_solver(d["solver"], d["n"], d["m"])
 
     def __getstate__(self) -> dict:
-        self._machine()  # the machine code travels made (the receiver may lack the compiler)
+        # the machine code travels made (the receiver may lack the compiler), and so does
+        # the compiled loop's (FusedKernel.loop), which a run makes whatever the evaluator: an
+        # unpickled model (a sweep's) steps as this one would, not in Python
+        self._machine()
+        fk, mc = self._fused, self._machine_code
+        if fk is not None and fk.solves and fk.loop is not None and mc is not None:
+            if mc.available and mc.get(self._machine_agrees) is not None:
+                with contextlib.suppress(Exception):  # (not made: the receiver steps in Python)
+                    fk.loop()
         return super().__getstate__()  # type: ignore[misc]
 
     def _unpickled(self) -> set[str]:
