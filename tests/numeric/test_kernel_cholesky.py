@@ -1,4 +1,4 @@
-"""The compiled right-hand side above the fused limit (numba, :mod:`pfaff.numeric.kernelchol`):
+"""The compiled right-hand side above the fused limit (LLVM JIT through llvmlite, :mod:`pfaff.numeric.kernelchol`):
 the Cholesky solve against NumPy's, the whole call on a hand-made two-function LLVM kernel
 against the closed-form 2 × 2 solve, and in a model against the SciPy LAPACK path it replaces."""
 
@@ -15,7 +15,7 @@ from pfaff.derive.machine_kernel import SplitKernel
 from pfaff.numeric import kernelsolve
 from pfaff.numeric.machineloop import entry_point
 
-kernelchol = pytest.importorskip("pfaff.numeric.kernelchol")  # (numba)
+kernelchol = pytest.importorskip("pfaff.numeric.kernelchol")  # (llvmlite)
 
 
 def _solved(A: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:

@@ -14,7 +14,7 @@ The rule (:func:`choose`): the template kernels where there is no fused kernel (
 solver other than ``range-space``, or a function the printer cannot write); else machine code
 from :data:`MACHINE_FROM` unknowns n + m on (up to :data:`MACHINE_LIMIT`; above
 ``FUSED_LIMIT`` it is the kernel alone, solved with LAPACK or, without constraints, in one
-compiled call with the kernel (:mod:`pfaff.numeric.kernelchol`), its LLVM optimization level by
+compiled call with the kernel (:mod:`pfaff.numeric.kernelchol`, LLVM's JIT through llvmlite), its LLVM optimization level by
 :func:`machine_opt_level`), where one call of it beats the generated Python: through the
 unchecked entry point into a preallocated array (:func:`preallocated`) the machine-code right-hand
 side of the chain on a cart costs 2.3, 2.4, 2.7 and 2.8 µs at n + m = 3, 4, 5 and 6 against

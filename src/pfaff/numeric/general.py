@@ -144,8 +144,9 @@ class GeneralParts:
     def _record_machine(self, mc: MachineCode) -> None:
         """The machine code's kind and cost in ``timings``: ``machine_code`` (CPU seconds to
         build or load it), ``machine_kind`` (``"rhs"``: the whole right-hand side;
-        ``"kernel+LAPACK"``: the kernel alone, solved by LAPACK; ``"kernel+numba"`` once a
-        right-hand side solves it in numba's compiled Cholesky, :mod:`pfaff.numeric.kernelchol`) and, for the latter, ``machine_opt_level`` and
+        ``"kernel+LAPACK"``: the kernel alone, solved by LAPACK; ``"kernel+Cholesky"`` once a
+        right-hand side calls it and its compiled Cholesky solve in one call,
+        :mod:`pfaff.numeric.kernelchol`) and, for the kernel alone, ``machine_opt_level`` and
         ``machine_functions`` (the LLVM functions it is split into)."""
         fk = self._fused_kernel
         timings = self.timings  # type: ignore[attr-defined]

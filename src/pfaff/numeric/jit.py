@@ -86,10 +86,13 @@ def _compile(fn: Callable, warm: tuple) -> Callable | None:
         return None
 
 
-def loaded(name: str, load: Callable[[], ModuleType]) -> tuple[ModuleType | None, str, float]:
-    """A module of numba code, imported and warmed by ``load()`` once per process with Ctrl-C
-    and SIGTERM held (numba could swallow them): (the module, "", CPU seconds), or (None, why,
-    CPU seconds) where numba is missing or fails (the caller then keeps its other path).
+def loaded(
+    name: str, load: Callable[[], ModuleType], needs: str = "numba"
+) -> tuple[ModuleType | None, str, float]:
+    """A module of compiled code (numba's, or llvmlite's JIT), imported and warmed by ``load()``
+    once per process with Ctrl-C and SIGTERM held (a compiler could swallow them): (the module,
+    "", CPU seconds), or (None, why, CPU seconds) where its compiler is missing or fails (the
+    caller then keeps its other path).
 
     Parameters
     ----------
@@ -98,6 +101,8 @@ def loaded(name: str, load: Callable[[], ModuleType]) -> tuple[ModuleType | None
     load : callable
         Imports the module and compiles its functions (or loads them from numba's cache) for
         the argument types of its callers; returns the module.
+    needs : str
+        The compiler it needs, named where ``load`` cannot import (default ``"numba"``).
 
     Examples
     --------
@@ -114,8 +119,8 @@ def loaded(name: str, load: Callable[[], ModuleType]) -> tuple[ModuleType | None
                 try:
                     module, why = load(), ""
                 except ImportError:
-                    module, why = None, "numba is not installed"
-                except Exception as e:  # numba could not compile it
-                    module, why = None, f"numba failed ({type(e).__name__}: {str(e)[:120]})"
+                    module, why = None, f"{needs} is not installed"
+                except Exception as e:  # the compiler could not compile it
+                    module, why = None, f"compiling failed ({type(e).__name__}: {str(e)[:120]})"
             _MODULES[name] = (module, why, time.process_time() - start)
         return _MODULES[name]

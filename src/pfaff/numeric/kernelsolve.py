@@ -5,9 +5,9 @@ Above ``FUSED_LIMIT`` unknowns the machine code is the fused kernel alone
 matrix from its outputs and solves it by the range-space method with the floor
 (:func:`pfaff.numeric.kkt.solve_floored`, the algorithm of the model's ``range-space`` solver),
 without the assembly of :meth:`pfaff.NumericModel._kkt` (a new matrix per call, the velocity
-residual). Without constraints, M q̈ = Q − h is one compiled call where numba is installed
+residual). Without constraints, M q̈ = Q − h is one compiled call where llvmlite is installed
 (:mod:`pfaff.numeric.kernelchol`: the kernel's LLVM functions through their C entry points and
-the Cholesky solve in compiled loops; the 32-link chain on a cart, 33 unknowns, about 1.0×
+the Cholesky solve in loops compiled by LLVM's JIT; the 32-link chain on a cart, 33 unknowns, about 1.0×
 Pinocchio's ``aba``, ``benchmarks/engines.py``), else one in-place Cholesky solve on the kernel's
 outputs by SciPy's LAPACK (``dppsv`` in packed storage, or ``dposv``; about 1.3–1.6× ``aba``),
 the kernel called through its unchecked entry point into a preallocated array
@@ -141,45 +141,46 @@ def _compiled_rhs(
     """:func:`kernel_rhs` without constraints as one compiled call
     (:func:`pfaff.numeric.kernelchol.kernel_cholesky`: the kernel's LLVM functions through
     their C entry points, then the Cholesky solve in compiled loops); the array path where M is
-    not positive definite or q̈ is not finite. None where numba is not installed or ``compiled``
-    has no C entry points (then :func:`_cholesky_rhs`)."""
+    not positive definite or q̈ is not finite. None where llvmlite is not installed or
+    ``compiled`` has no C entry points (then :func:`_cholesky_rhs`)."""
     functions = _entry_points(compiled)
     module = compiled_solver()[0] if functions is not None else None
     if module is None or functions is None:
         return None
-    kernel_cholesky = module.kernel_cholesky
+    solver = module.compile_solver()
     plan, work = module.plan_of(functions, fk.entry_index, n, int(compiled.offsets[-1]))
     done = work[work.size - 2 * n :]
     p0, p1 = 1 + 2 * n, 1 + 2 * n + (len(live) if live is not None else 0)
+    pa, xa, wa = plan.ctypes.data, buf.ctypes.data, work.ctypes.data  # (kept alive below)
 
     def rhs(t: float, yl: list) -> list:
         buf[0] = t
         buf[1 : 1 + 2 * n] = yl
         if live is not None:
             buf[p0:p1] = live
-        if kernel_cholesky(plan, buf, work) == 0:
+        if solver(pa, xa, wa) == 0:
             stats["kkt_solves"] += 1
             return done.tolist()
         return slow(t, yl)
 
-    rhs.keep = compiled  # type: ignore[attr-defined]  # its entry points are in ``plan``
+    rhs.keep = (compiled, plan, buf, work)  # type: ignore[attr-defined]  # (their addresses)
     rhs.compiled_solve = compiled_solver()[1]  # type: ignore[attr-defined]
     return rhs
 
 
 def compiled_solver() -> tuple[ModuleType | None, float]:
-    """:mod:`pfaff.numeric.kernelchol` with its function compiled or loaded from numba's cache
-    (once per process, :func:`pfaff.numeric.jit.loaded`), or None where numba is missing or
+    """:mod:`pfaff.numeric.kernelchol` with its function compiled by LLVM's JIT (once per
+    process, :func:`pfaff.numeric.jit.loaded`: a few ms), or None where llvmlite is missing or
     fails (the model then solves with SciPy's LAPACK wrappers); and the CPU seconds that took
     (``timings["compiled_solve"]``)."""
-    module, _, seconds = loaded("kernelchol", _load_kernelchol)
+    module, _, seconds = loaded("kernelchol", _load_kernelchol, needs="llvmlite")
     return module, seconds
 
 
 def _load_kernelchol() -> ModuleType:
     from pfaff.numeric import kernelchol
 
-    kernelchol.warm()
+    kernelchol.compile_solver()
     return kernelchol
 
 

@@ -67,8 +67,9 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
     timings : dict
         CPU seconds of the stages that made the model: ``equations``, ``compile`` (its
         ``codegen`` part, see ``cache``: ``"hit"``, ``"miss"``, ``"off"`` or ``"reused"``),
-        ``evaluator`` and, once made, ``machine_code`` (and ``compiled_solve``: numba's load
-        of the compiled right-hand side above the fused limit, :mod:`pfaff.numeric.kernelchol`).
+        ``evaluator`` and, once made, ``machine_code`` (and ``compiled_solve``: LLVM's JIT
+        compile of the right-hand side's Cholesky solve above the fused limit, once per process,
+        :mod:`pfaff.numeric.kernelchol`).
 
     Examples
     --------
@@ -311,10 +312,10 @@ class NumericModel(CheckedGeneral, GeneralParts, StreamModel):
                 fixed = [*self._p, alpha, beta, *taus]
                 solve = (alpha, beta, floor, scales)
                 rhs = kernel_rhs(fk, machine, n, fixed, live, solve, slow, self.stats)
-                seconds = getattr(rhs, "compiled_solve", None)  # numba's load, once per process
+                seconds = getattr(rhs, "compiled_solve", None)  # its JIT compile, once per process
                 if seconds is not None:  # (the kernel and the Cholesky solve in one call)
                     self.timings.setdefault("compiled_solve", seconds)
-                    self.timings["machine_kind"] = "kernel+numba"
+                    self.timings["machine_kind"] = "kernel+Cholesky"
                 return rhs
         if run["full"] and run["rho"] and fk.rfn_aug is not None:  # M singular: M + ρAᵀA
             fixed = (alpha, beta, *([0.0] * (self.m + 1)), run["rho"], slow)

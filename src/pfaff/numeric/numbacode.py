@@ -4,8 +4,7 @@
 numba's on-disk cache) and ``call_entry`` (a call through a C entry point
 ``void *f(double *out, const double *in, void *data)``, SymEngine's LLVM functions':
 :func:`pfaff.numeric.machineloop.entry_point`); ``fresh`` (a cache entry dropped when pfaff's
-sources changed). Used by the compiled right-hand side of mid-size models
-(:mod:`pfaff.numeric.kernelchol`), the band LU (:mod:`pfaff.numeric.bandlu`), the compiled
+sources changed). Used by the band LU (:mod:`pfaff.numeric.bandlu`), the compiled
 passes of long arrays (:mod:`pfaff.numeric.jit`) and the compiled stepping loop
 (:mod:`pfaff.integrate.loopkernel`).
 """
