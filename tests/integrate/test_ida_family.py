@@ -52,19 +52,26 @@ def test_sparse_and_dense_newton_matrices_agree() -> None:
     np.testing.assert_allclose(sparse.multipliers, dense.multipliers, rtol=1e-6, atol=1e-8)
 
 
-def test_the_closed_ring_takes_the_dense_path_and_its_closed_form() -> None:
-    """A redundant row (the closed ring's last spacing): IDA on the dense Newton matrix, whose
-    regularization fixes λ along the null space of Aᵀ; the motion is the open ring's. The
-    reported states are projected (the correction uses the rows the solver keeps: the left-out
-    row's residual once failed to fit them, 65 against 64)."""
+def test_the_closed_ring_takes_the_sparse_path_without_its_dependent_row() -> None:
+    """A redundant row (the closed ring's last spacing): the DAE keeps the other rows
+    (``model.dae_model``) and takes the sparse Newton matrix; the motion is the open ring's
+    closed form, every row's residual (the left-out one's too) stays at rounding, λ_1 = −F/2,
+    and the spacing multipliers are the minimum-norm ones, orthogonal to the hoop stress (the
+    all-ones vector over the spacing rows). IDA's dense path (whose regularization fixes λ
+    along the null space of Aᵀ) gives the same motion."""
     n = 64
     ring = pfaff.models.rolling_ring(n, force=True, family=True, closed=True)
     with pytest.warns(pfaff.RedundancyWarning):
         model = ring.equations().compile({"M": M_, "r": R_, "F": F_})
-    assert not model.sparse_dae
+    assert not model.sparse_dae and model.dae_model.sparse_dae and model.dae_model.m == n
     q, qd = pfaff.models.ring_state(n, radius=R_, theta=0.3, theta_dot=0.8)
-    traj = pfaff.simulate(model, q, qd, (0.0, 1.0), method="ida", t_eval=[0.0, 1.0])
-    assert traj.status == "success"
-    assert np.abs(traj.constraint_residual[-1]).max() < 1e-10
-    theta = 0.3 + 0.8 + 0.5 * F_ / (2 * M_ * R_)
-    assert traj.q[-1, 1] == pytest.approx(theta, rel=1e-7)
+    kw = {"method": "ida", "t_eval": [0.0, 0.5, 1.0]}
+    traj = pfaff.simulate(model, q, qd, (0.0, 1.0), **kw)
+    assert traj.status == "success" and traj.stats["njev"] > 0
+    assert np.abs(traj.constraint_residual).max() < 1e-10
+    theta = 0.3 + 0.8 * traj.t + 0.5 * F_ / (2 * M_ * R_) * traj.t**2
+    np.testing.assert_allclose(traj.q[:, 1], theta, rtol=1e-7)
+    np.testing.assert_allclose(traj.multipliers[:, 0], -F_ / 2, rtol=1e-6)
+    assert np.abs(traj.multipliers[:, 1:].sum(axis=1)).max() < 1e-8  # no hoop stress in it
+    dense = pfaff.simulate(model, q, qd, (0.0, 1.0), ida_jacobian="fd", **kw)
+    np.testing.assert_allclose(traj.q, dense.q, rtol=0, atol=1e-8)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Self
 
 import numpy as np
 import scipy.sparse as sps
@@ -99,6 +100,13 @@ class StreamModel(Quantities, ModelValue):
     evaluator = "template"  # (general models choose theirs: pfaff.numeric.evaluator)
     mass_singular = False  # (a general model's run finds it at its first state)
     sparse_dae = False  # IDA's Newton matrix: dense (families: the sparse one of dae_newton)
+
+    @property
+    def dae_model(self) -> Self:
+        """The model whose constraint rows the DAE method keeps: this one (a family may leave
+        out a row dependent on the others:
+        :attr:`pfaff.numeric.structured.StructuredModel.dae_model`)."""
+        return self
 
     def compile_machine_code(self) -> bool:
         """False: this model evaluates with its template kernels (no machine code)."""

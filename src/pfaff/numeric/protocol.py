@@ -124,6 +124,9 @@ class DynamicsModel(Protocol):
     sparse_dae : bool
         Whether IDA takes its Newton matrix in CSC from ``dae_newton`` (families) instead of
         assembling a dense one from ``dae_blocks``.
+    dae_model : DynamicsModel
+        The model whose constraint rows the DAE keeps: the model itself, or a family's without
+        a row dependent on the others (the closed ring's last spacing).
     """
 
     n: int
@@ -141,6 +144,7 @@ class DynamicsModel(Protocol):
     evaluator: str
     mass_singular: bool
     sparse_dae: bool
+    dae_model: DynamicsModel
 
     @property
     def applied_power(self) -> bool: ...

@@ -163,10 +163,19 @@ class StructuredModel(StreamModel):
     @property
     def sparse_dae(self) -> bool:  # type: ignore[override]
         """IDA's Newton matrix in CSC (:mod:`pfaff.numeric.ggl`), unless a row depends on the
-        others (the closed ring): its regularization, scaled for long chains, is then too small
-        to fix λ along the null space of Aᵀ (the ring of 64 went astray), and IDA takes the
-        dense path, whose 1e-8 does."""
+        others (the closed ring): its regularization, scaled for long chains, is too small to
+        fix λ along the null space of Aᵀ (the ring of 64 went astray). Such a model's DAE is
+        :attr:`dae_model`'s, without the dependent row."""
         return self.__dict__.get("_drop") is None
+
+    @property
+    def dae_model(self) -> StructuredModel:  # type: ignore[override]
+        """The model whose rows the DAE keeps: this one, or, where the structure leaves out a
+        row dependent on the others (the closed ring's last spacing), the model of the others
+        (the same motion: the left-out row holds wherever they do; the trajectory's λ of every
+        row comes from the whole model)."""
+        d = self.__dict__.get("_drop")
+        return self if d is None else _rows_view(self, d)  # (its plan and solver: this model's)
 
     def proves_full_rank(self, t: float, q: np.ndarray) -> bool:
         """True when A has the triangular structure with non-zero pivots at (t, q), which proves
@@ -206,9 +215,7 @@ def _dropped_plan(model: StructuredModel) -> tuple[int | None, StructuredModel, 
     ]  # fmt: skip
     if not last:
         return None, model, None
-    view = object.__new__(type(model))
-    view.__dict__.update(model.__dict__)
-    view.__dict__.update(con=[c for i, c in enumerate(model.con) if i != last[0]], m=model.m - 1)
+    view = _rows_view(model, last[0])
     plan = triangular_plan(view)
     if plan is None:
         return None, model, None
@@ -219,6 +226,19 @@ def _dropped_plan(model: StructuredModel) -> tuple[int | None, StructuredModel, 
     if not np.isfinite(w).all() or np.abs(A.T @ w).max() > 1e-9 * (1 + abs(A).max()):
         return None, model, None  # the row is independent: not a redundant closure
     return last[0], view, plan
+
+
+def _rows_view(model: StructuredModel, block: int) -> StructuredModel:
+    """``model`` without its last constraint row (the single-row block ``block``): the same
+    parts and per-run state (a run copy's view reads its inputs), m − 1 rows."""
+    view = object.__new__(type(model))
+    view.__dict__.update(model.__dict__)
+    keep = np.delete(np.asarray(model.holonomic), model.m - 1)
+    view.__dict__.update(
+        con=[c for i, c in enumerate(model.con) if i != block], m=model.m - 1, holonomic=keep,
+        _drop=None, _view=view,
+    )  # fmt: skip
+    return view
 
 
 def _null_vector(A: sps.spmatrix, p: int) -> np.ndarray:
