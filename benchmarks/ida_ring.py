@@ -14,8 +14,24 @@ others), whose DAE leaves that row out (``model.dae_model``) and takes the same 
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-28 on the 2-core machine shared with other runs (load average 6.7), CPU
-seconds, medians of three::
+Measured 2026-11-28 on an idle machine (load average 0.5-0.6), CPU seconds, medians of three,
+two runs (``KEEP_RATIO`` = 6)::
+
+          N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
+       1024     0.023     0.083       3.7        23        5   1.1e-15   2.1e-09
+      16384     0.098     0.686       7.0        23        5   2.2e-16   2.1e-09
+      65536     0.192     2.555      13.3        23        5   2.2e-16   2.1e-09
+
+and 2.3, 6.9 and 12.6x in the second run: idle, the target (10x at 2^16) is missed. ``KEEP_RATIO``
+3 against 6, alternated at 2^16: 3.02/2.75, 2.84/2.41, 2.62/2.42 s. The closed ring
+(``--closed``, ratio 3): 2.75 s, 9.9x in one run. A run at 2^16 is 23 steps of IDA's own vector
+work (GMRES, about 15 % of the run), 5 factorizations (a band LU with half its rows
+interchanged, the λ rows' diagonal being the regularization alone: U's band is then 8 wide, not
+4), about 53 preconditioner solves (7 ms each: the band substitutions are a chain of dependent
+updates, latency-bound, not memory-bound), the residuals, and the setup (pattern, reverse
+Cuthill–McKee, SUNDIALS: about 0.4 s).
+
+Earlier the same day, on the machine shared with other runs (load average 6.7), ratio 3::
 
           N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
        1024     0.019     0.054       2.9        19        7   1.1e-15   2.5e-09
@@ -38,8 +54,8 @@ factorizations instead of 14, GMRES iterating a little more). At 2^16 a run is n
 factorizations (assembly included, 40-60 ms each), 53 preconditioner solves (7 to 9 ms: the
 compact band factors, read once per solve), 53 residuals (3 to 5 ms), IDA's own vector work
 (about 0.4 s) and its setup (pattern, band plan, SUNDIALS: 0.25-0.45 s); the band's work is
-bound by memory traffic. The target (10x at 2^16) is met in these runs (7.7 to 9.0), with
-little margin on this loaded machine, where the projection method's own time varies by 50 %.
+bound by memory traffic. The target (10x at 2^16) was met in those runs (7.7 to 9.0), on a
+loaded machine, where the projection method's own time varies by 50 %.
 Numba's band LU loads once per process (about 0.9 s; 2 s compiling the first time): the
 warm-up takes it. Before the band path, IDA on a family was dense: 214 s at N = 1024, refused
 from about 2000 members on. N = 2^22 and 2^24 are refused (about 22 and 88 GiB estimated from

@@ -21,7 +21,7 @@ derivatives of each template's outputs by differences in its local coordinates),
 exactly (a band with a dense border, :mod:`pfaff.numeric.bordered`, or SciPy's SuperLU) as the
 preconditioner of IDA's GMRES, which then converges in one iteration until c_j drifts; the
 factors are kept over several steps, and over IDA's own requests while c_j stays within a factor
-3 of theirs (``KEEP_RATIO``: GMRES iterates a little more, 7 factorizations instead of 14 on the
+6 of theirs (``KEEP_RATIO``: GMRES iterates a little more, 5 factorizations instead of 14 on the
 ring of 2^16); its first step comes from the local error of IDA's
 first-order start (:func:`first_step`). scikit-sundae's ``linsolver="sparse"`` (SuperLU_MT with
 this matrix as ``jacfn``) did as well as SuperLU in time (ring of 2^16, 1 s: 44 steps, 12.4 s
@@ -149,7 +149,8 @@ class IDAStepper(Stepper):
         except ImportError as e:  # pragma: no cover - a declared dependency
             raise PfaffError("method 'ida' needs scikit-sundae (pip install scikit-sundae)") from e
         if not opts.ida_jacobian and not model.mass_singular and not model.sparse_dae:
-            model = model.dae_model  # (a family's dependent closing row left out: sparse again)
+            dae = model.dae_model  # (a family's dependent closing row left out: sparse again)
+            model = dae if dae is not model and dae.sparse_dae else model
         self.model = model
         n, m = model.n, model.m
         self.hrows = np.flatnonzero(model.holonomic)

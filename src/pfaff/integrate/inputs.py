@@ -95,6 +95,12 @@ class DrivenModel:
     def __getattr__(self, attr: str) -> Any:
         return getattr(self._model, attr)
 
+    @property
+    def dae_model(self) -> DrivenModel:
+        """This driven model: its DAE keeps every row (the model it wraps, unwrapped, would
+        lose the inputs, which only this wrapper writes)."""
+        return self
+
     def set(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         """Write the inputs' values at (t, q, q̇) into the run's parameter vector."""
         p, isfinite = self._p, math.isfinite
