@@ -30,6 +30,7 @@ the flat index i·n + j (i ≤ j) of each M entry in output order]; the work arr
 from __future__ import annotations
 
 import ctypes
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -213,6 +214,7 @@ def _sqrt(b: ir.IRBuilder) -> ir.Function:
 
 
 _ENGINE: list = []  # the JIT engine and its module, kept alive with the process
+_LOCK = threading.Lock()
 
 
 def compile_solver() -> Solver:
@@ -229,8 +231,14 @@ def compile_solver() -> Solver:
     >>> compile_solver()(plan.ctypes.data, x.ctypes.data, work.ctypes.data), work[-2:].tolist()
     (0, [0.25, 0.75])
     """
-    if _ENGINE:
-        return _ENGINE[1]
+    with _LOCK:
+        if not _ENGINE:
+            _ENGINE[:] = _compiled()
+    return _ENGINE[1]
+
+
+def _compiled() -> list:
+    """[the JIT engine, the function]: ``kernel_cholesky`` optimized and compiled for this CPU."""
     llvm.initialize_native_target()
     llvm.initialize_native_asmprinter()
     target = llvm.Target.from_default_triple().create_target_machine(
@@ -246,9 +254,7 @@ def compile_solver() -> Solver:
     engine = llvm.create_mcjit_compiler(parsed, target)
     engine.finalize_object()
     kind = ctypes.CFUNCTYPE(ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
-    solver = kind(engine.get_function_address("kernel_cholesky"))
-    _ENGINE[:] = [engine, solver]
-    return solver
+    return [engine, kind(engine.get_function_address("kernel_cholesky"))]
 
 
 def kernel_cholesky(plan: np.ndarray, x: np.ndarray, work: np.ndarray) -> int:
