@@ -25,7 +25,7 @@ Rows (wall-clock seconds, the best of ``--repeat``):
 ``ship`` (a second table; ``--ship-links 0`` leaves it out)
     A sweep of a chain of ``--ship-links`` (default 7) pendulum links in absolute angles (a model
     file whose derivation and compilation cost about a second; n = 7: the generated Python; at
-    n = 8 the shipped model's machine code is lost in the pickle and every run fails) on a
+    n = 8 machine code, which the pickle carries made, with the compiled loop's) on a
     fresh local cluster of 2 workers, ``--ship-n``² runs of 2 s, in two modes: ``shipped`` (the
     default: the spec carries the compiled model pickled by
     :func:`pfaff.sweep.source.shipped_model`, each worker unpickles it) and ``derived in workers``
