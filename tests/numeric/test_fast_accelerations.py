@@ -221,3 +221,24 @@ def test_the_generated_pivots_are_the_scaled_cholesky_pivots() -> None:
     np.testing.assert_allclose(got, want, rtol=1e-10)
     assert passes(*got)
     assert not passes(M_PIVOT / 2, *got[1:])
+
+
+@pytest.mark.parametrize("evaluator", EVALUATORS)
+def test_a_complex_value_is_refused_and_numpy_times_are_fast(evaluator: str) -> None:
+    """A force −x^(3/2) at x = −1: Python's (−1.0)**1.5 is complex, not an error, and the
+    pivots (of M alone) pass; the generated solve gives it up and the full path names it. A
+    NumPy float t takes the fast path (``traj.t[i]`` is one): the same q̈ as a float t."""
+    x = pfaff.coordinates("x")
+    s = pfaff.System([x])
+    s.add_particle(2, [x, 0])
+    s.add_generalized_force(x, -(x ** sp.Rational(3, 2)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # (SymEngine: no machine code for it)
+        model = s.equations().compile({}, evaluator=evaluator)
+    with pytest.raises(StateError, match="fractional power of a negative value"):
+        model.accelerations(0.0, np.array([-1.0]), np.zeros(1))
+    assert fused_accelerations(model, 0.0, np.array([-1.0]), np.zeros(1)) is None
+    got = fused_accelerations(model, np.float64(0.5), np.array([4.0]), np.zeros(1))
+    if evaluator == "python" or model.evaluator == "machine":
+        assert got is not None
+        np.testing.assert_allclose(got[0], [-8.0 / 2.0], rtol=1e-15)  # −4^(3/2) / m

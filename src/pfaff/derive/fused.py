@@ -583,7 +583,8 @@ def _checked_function(
     """``afn`` (see :func:`_rhs_function`): the kernel, c = −(Ȧq̇ + ḃ) (α = β = 0) and the
     unfloored Schur solve, ``acc(t, q: list, q̇: list, params) -> ([q̈], [λ])``, or None where a
     check of :func:`pfaff.numeric.checkedsolve.passes` fails, a value is out of its domain or
-    overflows, or anything (t, q, q̇, q̈, λ) is not finite: the checks, the finiteness test and
+    overflows, or anything (t, q, q̇, q̈, λ) is not a finite real (a fractional power of a negative
+    value is complex in Python: the full path names it): the checks, the finiteness test and
     the split into q̈ and λ run here, on local floats (issue 25: ``accelerations()`` within 2×
     a right-hand side). ``acc(..., _raw=True)`` returns [q̈, λ, checks] unchecked."""
     lam: list[str] = []
@@ -610,9 +611,9 @@ def _checked_function(
             f"        if not ({passed}):",
             "            return None",
             f"        _s = {' + '.join(every)}",
-            "    except (ValueError, ArithmeticError):",
+            "    except (ValueError, ArithmeticError, TypeError):  # (TypeError: a complex value)",
             "        return None",
-            "    if _s - _s != 0.0:  # (NaN or infinity somewhere)",
+            "    if _s.__class__ is not float or _s - _s != 0.0:  # (complex, NaN or infinity)",
             "        return None",
             f"    return [{', '.join(results[:n])}], [{', '.join(results[n:])}]",
         ]

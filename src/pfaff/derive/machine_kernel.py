@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import pickle
+import threading
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -47,10 +48,15 @@ def cached_machine(
     it from the cache (None when it is not there). A failure of ``builder`` propagates (the
     caller, :class:`pfaff.numeric.evaluator.MachineCode`, warns and falls back)."""
     done: list = []
+    lock = threading.RLock()  # (another thread waits for the build instead of seeing its None)
 
     def make(build: bool = True) -> Callable | None:
         if done:
             return done[0]
+        with lock:
+            return done[0] if done else _made(build)
+
+    def _made(build: bool) -> Callable | None:
         raw = cache.load(key, kind) if key is not None else None
         if raw is not None:
             with contextlib.suppress(Exception):
@@ -58,8 +64,12 @@ def cached_machine(
                 return done[0]
         if not build:
             return None
-        done.append(None)
-        done[0] = builder()
+        try:
+            made = builder()
+        except BaseException:
+            done.append(None)  # (a failed build is not tried again)
+            raise
+        done.append(made)
         if key is not None:
             with contextlib.suppress(Exception):
                 cache.store(key, kind, pickle.dumps(done[0]))

@@ -6,9 +6,11 @@ redundancy test and the floored range-space solve: three passes of NumPy calls a
 LAPACK ones, 4–34× a right-hand side of the same model (issue 25). Two shorter paths:
 
 - :func:`fused_accelerations`, a small model with a generated solve: one call of its machine
-  code, or of the generated Python ``FusedKernel.afn``, returns q̈, λ and the pivots that
-  solved them (:func:`pfaff.numeric.smallsolve.schur_source`); where :func:`passes` holds,
-  none of the checks could find anything, and the call is about a right-hand side
+  code returns q̈, λ and the pivots that solved them
+  (:func:`pfaff.numeric.smallsolve.schur_source`), and the generated Python
+  ``FusedKernel.afn`` tests the same pivots itself (against :data:`PASS`); where
+  :func:`passes` holds, none of the checks could find anything, and the call is about a
+  right-hand side
   (``benchmarks/accelerations.py``);
 - :func:`checked_solve`, any dense model: the scaled factor that passes the inertia test's
   criterion solves the system, and the Schur complement's own factor says whether the floor
@@ -151,7 +153,7 @@ def fast_accelerations(model: NumericModel) -> Callable | None:
 
     def plain(t: object, q: object, qd: object) -> bool:
         return (
-            type(t) is float and type(q) is _ARRAY and type(qd) is _ARRAY
+            isinstance(t, float) and type(q) is _ARRAY and type(qd) is _ARRAY
             and q.dtype == qd.dtype == _FLOAT and q.shape == qd.shape == shape
         )  # fmt: skip
 
@@ -168,12 +170,12 @@ def fast_accelerations(model: NumericModel) -> Callable | None:
 
     def fast(t: object, q: object, qd: object) -> tuple[np.ndarray, np.ndarray] | None:
         if not (
-            type(t) is float and type(q) is _ARRAY and type(qd) is _ARRAY
+            isinstance(t, float) and type(q) is _ARRAY and type(qd) is _ARRAY
             and q.dtype == qd.dtype == _FLOAT and q.shape == qd.shape == shape
         ):  # fmt: skip
             return None
         # checks, finiteness (of t, q, q̇, q̈ and λ) and domain errors are the generated code's
-        r = acc(t, q.tolist(), qd.tolist(), model._p)
+        r = acc(float(t), q.tolist(), qd.tolist(), model._p)  # (a NumPy float's t too)
         return None if r is None else (_array(r[0]), _array(r[1]))
 
     return fast

@@ -250,8 +250,11 @@ class GeneralParts:
         # unpickled model (a sweep's) steps as this one would, not in Python
         self._machine()
         fk, mc = self._fused, self._machine_code
-        if fk is not None and fk.solves and fk.loop is not None and mc is not None:
-            if mc.available and mc.get(self._machine_agrees) is not None:
+        if (
+            fk is not None and fk.solves and fk.rfn is not None and fk.loop is not None
+            and mc is not None and mc.available
+        ):  # fmt: skip
+            if mc.get(self._machine_agrees) is not None:
                 with contextlib.suppress(Exception):  # (not made: the receiver steps in Python)
                     fk.loop()
         return super().__getstate__()  # type: ignore[misc]

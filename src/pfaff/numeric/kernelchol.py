@@ -17,7 +17,7 @@ unblocked ``dpotf2`` (right-looking, the pivot's reciprocal scaling its row), in
 rounding.
 
 Why llvmlite's IR builder and not numba: the function is a few loops, written here as LLVM IR
-and compiled by LLVM's JIT in each process in milliseconds (:func:`compile_solver`); numba's
+and compiled by LLVM's JIT in each process in 0.1–0.25 s of CPU (:func:`compile_solver`); numba's
 import and start cost 0.35–0.95 s of CPU in the first right-hand side of every process (issue
 25: +14–18 % on a cold build of the 32-link chain). llvmlite is the library numba generates its
 code with; no disk cache is needed.
@@ -29,8 +29,10 @@ the flat index i·n + j (i ≤ j) of each M entry in output order]; the work arr
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import threading
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -219,7 +221,7 @@ _LOCK = threading.Lock()
 
 def compile_solver() -> Solver:
     """The compiled ``kernel_cholesky`` as ``f(plan address, x address, work address) -> int``
-    (ctypes): made once per process by LLVM's JIT at optimization level 3 (a few ms).
+    (ctypes): made once per process by LLVM's JIT at optimization level 3 (0.1–0.25 s of CPU).
 
     Examples
     --------
@@ -239,6 +241,10 @@ def compile_solver() -> Solver:
 
 def _compiled() -> list:
     """[the JIT engine, the function]: ``kernel_cholesky`` optimized and compiled for this CPU."""
+    with warnings.catch_warnings():  # (llvmlite 0.44 needs it; later ones refuse it)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        with contextlib.suppress(RuntimeError):
+            llvm.initialize()
     llvm.initialize_native_target()
     llvm.initialize_native_asmprinter()
     target = llvm.Target.from_default_triple().create_target_machine(
@@ -248,6 +254,7 @@ def _compiled() -> list:
         jit=True,
     )  # (this machine's vector instructions, as numba and SymEngine's LLVM use them)
     parsed = llvm.parse_assembly(str(_module()))
+    parsed.triple, parsed.data_layout = target.triple, str(target.target_data)  # (optimized for it)
     parsed.verify()
     builder = llvm.create_pass_builder(target, llvm.create_pipeline_tuning_options(speed_level=3))
     builder.getModulePassManager().run(parsed, builder)
@@ -258,8 +265,9 @@ def _compiled() -> list:
 
 
 def kernel_cholesky(plan: np.ndarray, x: np.ndarray, work: np.ndarray) -> int:
-    """The compiled function on arrays (checked: int64 and float64, contiguous): 0, a pivot's
-    position + 1, or −1; [q̇, q̈] at the end of ``work``. A right-hand side calls the compiled
+    """The compiled function on arrays made by :func:`plan_of` and an ``x`` of the kernel's
+    inputs (their dtypes, contiguity and the sizes ``plan`` names are checked, not the plan's
+    indices): 0, a pivot's position + 1, or −1; [q̇, q̈] at the end of ``work``. A right-hand side calls the compiled
     function on its arrays' addresses instead (:func:`pfaff.numeric.kernelsolve.kernel_rhs`).
 
     Examples

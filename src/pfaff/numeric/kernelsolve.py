@@ -170,7 +170,7 @@ def _compiled_rhs(
 
 def compiled_solver() -> tuple[ModuleType | None, float]:
     """:mod:`pfaff.numeric.kernelchol` with its function compiled by LLVM's JIT (once per
-    process, :func:`pfaff.numeric.jit.loaded`: a few ms), or None where llvmlite is missing or
+    process, :func:`pfaff.numeric.jit.loaded`: 0.1–0.25 s), or None where llvmlite is missing or
     fails (the model then solves with SciPy's LAPACK wrappers); and the CPU seconds that took
     (``timings["compiled_solve"]``)."""
     module, _, seconds = loaded("kernelchol", _load_kernelchol, needs="llvmlite")
