@@ -46,6 +46,7 @@ def test_noise_free_with_initial_values(model):
     assert res.residuals.shape == (61, 2)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_observed_expression_of_a_fitted_parameter(model):
     """The bob's height −l cos θ depends on l directly: its Jacobian needs ∂y/∂l."""
     t = np.linspace(0, 3, 61)

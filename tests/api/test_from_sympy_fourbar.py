@@ -112,6 +112,7 @@ def test_fourbar_against_lagrange_multiplier_form(example, fourbar, lagrange):
             np.testing.assert_allclose(lam, ref[6:], rtol=0, atol=1e-12 * scale)
 
 
+@pytest.mark.slow  # (its Lagrange fixture takes 4 s: the full suite runs it)
 def test_fourbar_multiplier_sign_against_solve_multipliers(example, fourbar, lagrange):
     """λ_pfaff = −λ of LagrangesMethod.solve_multipliers (SymPy's −A, sympy#30215)."""
     system, model = fourbar

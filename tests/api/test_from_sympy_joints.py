@@ -108,11 +108,14 @@ def _system(kind: str) -> System:
 KINDS = ["pin", "prismatic", "cylindrical", "planar", "spherical", "weld"]
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize(
+    "kind", [k if k in ("pin", "weld") else pytest.param(k, marks=pytest.mark.slow) for k in KINDS]
+)  # (about a second each: the full suite runs all)
 def test_joint_against_kane(kind):
     _assert_matches_kane(_system(kind), seed=KINDS.index(kind))
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_actuators_against_kane():
     """Actuators enter through their loads: a spring, a damper and a Duffing spring along the
     line from a ground point to the sliding body, a torque between the slider and its pendulum."""

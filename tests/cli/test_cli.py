@@ -80,6 +80,7 @@ def test_console_script_runs() -> None:
     assert json.loads(res.stdout)["theta_ddot"] == pytest.approx(2.0, abs=1e-12)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_ring_simulate_json(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     """x(t) = x₀ + r θ̇₀ t + F t²/(4M) and friction −F/2 throughout, through the CLI."""
     out = tmp_path / "ring.nc"

@@ -71,7 +71,8 @@ def _run(kind, w0, t_end, n_out, sequence="321"):
     return tr, att, model
 
 
-@pytest.mark.parametrize("t_end", [10.0, pytest.param(100.0, marks=pytest.mark.slow)])
+@pytest.mark.slow  # (4 s at 10 s: the full suite runs both)
+@pytest.mark.parametrize("t_end", [10.0, 100.0])
 def test_three_attitude_sets_agree_with_eulers_equations(t_end) -> None:
     """A motion that keeps 3-2-1 angles clear of their singularity: H along inertial z (the
     body starts with ω mostly about its z axis), so the pitch stays small."""
@@ -92,6 +93,7 @@ def test_three_attitude_sets_agree_with_eulers_equations(t_end) -> None:
             assert np.abs(np.sum(tr.q**2, axis=1) - 1).max() < 1e-12
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_mrp_switches_keep_the_dcm_continuous() -> None:
     w0 = np.array([0.2, 0.15, 1.5])  # turns about z: |σ| passes 1 every half turn
     tr, att, _ = _run("mrp", w0, 12.0, 2001)

@@ -8,7 +8,7 @@ import pickle
 import numpy as np
 import pytest
 import sympy as sp
-from tests.methods import ALL_METHODS
+from tests.methods import ALL_METHODS, IDA_SLOW
 
 import pfaff
 from pfaff.errors import ModelError, OptionError, StateError
@@ -57,7 +57,7 @@ def ball():
     return pfaff.models.bouncing_ball(None).equations().compile({"m": 0.3, "g": G, "e": 0.8})
 
 
-@pytest.mark.parametrize("method", ALL_METHODS)
+@pytest.mark.parametrize("method", IDA_SLOW)
 def test_ball_bounces_to_rest(ball, method):
     """t₁ = √(2h/g), t_{k+1} = t_k + 2eᵏ√(2h/g); rest near t∞ = t₁(1 + e)/(1 − e), λ = m g."""
     h, e, m = 1.0, 0.8, 0.3
@@ -142,7 +142,7 @@ def _minimal(q, qd, L1, L2):
     return np.array([th1, th2]), np.array([w1, w2])
 
 
-@pytest.mark.parametrize("method", ALL_METHODS)
+@pytest.mark.parametrize("method", IDA_SLOW)
 def test_double_pendulum_hits_wall(method):
     """Post-impact rates from the impulse equation solved by hand in the two angles:
     M(θ) Δθ̇ = Jᵀ Λ, J θ̇⁺ = −e J θ̇⁻ with J = ∂(x₂ − wall)/∂θ; the energy lost is

@@ -158,6 +158,7 @@ def test_pd_simulation_matches_solve_ivp(arm, kane) -> None:
     assert np.all(np.abs(traj.q[-1] - TARGET) < np.abs(q0 - TARGET))
 
 
+@pytest.mark.slow  # (its Kane fixture takes 2 s: the full suite runs it)
 def test_angular_velocity_and_velocity_of_tip(arm, kane) -> None:
     _, bodies, q, (n, links, elbow), _ = arm
     tip = elbow + LENGTH[2] * links[2].x + 0.1 * links[2].y

@@ -98,6 +98,7 @@ def test_cumsum_band_with_scaled_diagonal() -> None:
         np.testing.assert_allclose(L.T @ band.solve_t(c), c, atol=1e-12)
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_compiled_backward_running_sum(monkeypatch: pytest.MonkeyPatch) -> None:
     """Lᵀ z = c by the compiled running sum from the end (long bands) and by NumPy's cumsum:
     the same additions in the same order, so the same numbers; and Lᵀ z = c holds."""

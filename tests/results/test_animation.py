@@ -180,6 +180,7 @@ def test_frames_between_reports_are_interpolated(pendulum_model):
     np.testing.assert_allclose(f.points, pendulum_model.geometry.points(q), atol=1e-7)
 
 
+@pytest.mark.slow  # (its body's run takes over a second: the full suite runs it)
 def test_frames_across_mrp_switches_follow_the_motion(body):
     system, model = body
     att = system.bodies[0].attitude

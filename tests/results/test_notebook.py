@@ -118,6 +118,7 @@ def test_linearization_summary_against_closed_form() -> None:
     ]
 
 
+@pytest.mark.slow  # (over a second: the full suite runs it)
 def test_root_locus_summary_stable_where_damped() -> None:
     s, x = _oscillator()
     locus = pfaff.root_locus(
