@@ -550,7 +550,7 @@ def _rhs_function(
     ys = ", ".join(f"_y{i}" for i in range(2 * n))
     params = [f"_p{k}" for k in range(n_params)]
     if checked:
-        return _checked_function(body, lines, mass, acon, (Ms, As, Fs, cs), ys, params)
+        return _checked_function(body, lines, mass, acon, (Ms, As, Fs, cs), params)
     schur, out = schur_source(mass, acon, Ms, As, Fs, cs, tau=taus, cap="_cap", prefix="_v")
     lines += [ln.strip() for ln in schur]
     rho = ["_rho"] if augmented else []
@@ -577,9 +577,13 @@ def _rhs_function(
 
 
 def _checked_function(
-    body: list[str], lines: list[str], mass: list, acon: list, names: tuple, ys: str,
+    body: list[str],
+    lines: list[str],
+    mass: list,
+    acon: list,
+    names: tuple,
     params: list[str],
-) -> Callable | None:  # fmt: skip
+) -> Callable | None:
     """``afn`` (see :func:`_rhs_function`): the kernel, c = −(Ȧq̇ + ḃ) (α = β = 0) and the
     unfloored Schur solve, ``acc(t, q: list, q̇: list, params) -> ([q̈], [λ])``, or None where a
     check of :func:`pfaff.numeric.checkedsolve.passes` fails, a value is out of its domain or
@@ -593,7 +597,7 @@ def _checked_function(
         mass, acon, *names, prefix="_v", multipliers=lam, checks=checks
     )  # fmt: skip
     n = len(out)
-    qs, qds = ys.split(", ")[:n], ys.split(", ")[n:]
+    qs, qds = [f"_y{i}" for i in range(n)], [f"_y{n + i}" for i in range(n)]
     results = [f"_r{i}" for i in range(len(out) + len(lam))]
     every = ["_t", *qs, *qds, *results]
     passed = " and ".join(f"({c}) > {bound}" for c, bound in zip(checks, PASS, strict=True))

@@ -6,9 +6,8 @@ Above it the generated solve is too long to write out (O((n + m)³) lines), and 
 Python kernel was most of a call: one right-hand side of the 32-link chain on a cart cost about
 325 µs through it. Here the kernel alone (M, A, Q − h, −(Ȧq̇ + ḃ), b, f: the outputs of ``fn``)
 is compiled by SymEngine's LLVM backend and the model solves the assembled KKT system with LAPACK
-(without constraints: the Cholesky solve in loops compiled by LLVM's JIT, the kernel called from
-them,
-:mod:`pfaff.numeric.kernelchol`; ``benchmarks/engines.py``).
+(without constraints: the Cholesky solve in loops compiled by LLVM's JIT, the kernel called
+from them, :mod:`pfaff.numeric.kernelchol`; ``benchmarks/engines.py``).
 
 SymEngine's LLVM compile time grows quickly with the kernel's size (about as n^4.5 for the
 chain on a cart as it came: 4.4–5.8 s at 32 unknowns, 32 s at 48). Three levers keep it bounded,

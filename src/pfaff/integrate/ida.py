@@ -148,9 +148,8 @@ class IDAStepper(Stepper):
             from sksundae.ida import IDA, IDAPrecond
         except ImportError as e:  # pragma: no cover - a declared dependency
             raise PfaffError("method 'ida' needs scikit-sundae (pip install scikit-sundae)") from e
-        if not opts.ida_jacobian and not model.mass_singular and not model.sparse_dae:
-            dae = model.dae_model  # (a family's dependent closing row left out: sparse again)
-            model = dae if dae is not model and dae.sparse_dae else model
+        if not opts.ida_jacobian and not model.mass_singular:
+            model = model.dae_model  # (a family's dependent closing row left out: sparse again)
         self.model = model
         n, m = model.n, model.m
         self.hrows = np.flatnonzero(model.holonomic)

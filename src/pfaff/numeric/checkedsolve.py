@@ -35,7 +35,6 @@ from pfaff.numeric.kkt import STATE_FLOOR
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from pfaff.numeric.fused import FusedKernel
     from pfaff.numeric.model import NumericModel
 
 _potrf = scipy.linalg.lapack.dpotrf
@@ -150,23 +149,18 @@ def fast_accelerations(model: NumericModel) -> Callable | None:
     if fk is None:
         return None
     shape = (model.n,)  # (an unpickled array's float64 dtype is equal to numpy's, not the same)
-
-    def plain(t: object, q: object, qd: object) -> bool:
-        return (
-            isinstance(t, float) and type(q) is _ARRAY and type(qd) is _ARRAY
-            and q.dtype == qd.dtype == _FLOAT and q.shape == qd.shape == shape
-        )  # fmt: skip
-
-    if model.evaluator == "machine":
-        return lambda t, q, qd: (
-            _machine_accelerations(model, fk, t, q, qd) if plain(t, q, qd) else None
-        )
-    if fk.rfn is None:  # (no rfn: the generated solve disagreed with the array solve when checked)
-        return None
-    make = getattr(fk.afn, "function", None)
-    acc = make() if make is not None else fk.afn
-    if acc is None:
-        return None
+    machine = model.evaluator == "machine"
+    acc = None
+    if machine:
+        if fk.checks != 3 or not fk.solves:  # (machine code made before its pivot checks were)
+            return None
+    else:
+        if fk.rfn is None:  # (the generated solve disagreed with the array solve when checked)
+            return None
+        make = getattr(fk.afn, "function", None)
+        acc = make() if make is not None else fk.afn
+        if acc is None:
+            return None
 
     def fast(t: object, q: object, qd: object) -> tuple[np.ndarray, np.ndarray] | None:
         if not (
@@ -174,6 +168,8 @@ def fast_accelerations(model: NumericModel) -> Callable | None:
             and q.dtype == qd.dtype == _FLOAT and q.shape == qd.shape == shape
         ):  # fmt: skip
             return None
+        if machine:
+            return _machine_accelerations(model, t, q, qd)
         # checks, finiteness (of t, q, q̇, q̈ and λ) and domain errors are the generated code's
         r = acc(float(t), q.tolist(), qd.tolist(), model._p)  # (a NumPy float's t too)
         return None if r is None else (_array(r[0]), _array(r[1]))
@@ -182,7 +178,7 @@ def fast_accelerations(model: NumericModel) -> Callable | None:
 
 
 def _machine_accelerations(
-    model: NumericModel, fk: FusedKernel, t: float, q: np.ndarray, qd: np.ndarray
+    model: NumericModel, t: float, q: np.ndarray, qd: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """:func:`fused_accelerations` by the machine code (the evaluator): one call on the run's
     input buffer, through its unchecked entry point into an output array of the run
@@ -190,7 +186,7 @@ def _machine_accelerations(
     if not _isfinite(t + sum(q.tolist()) + sum(qd.tolist())):
         return None
     machine = model._machine()
-    if machine is None or fk.checks != 3 or not fk.solves:
+    if machine is None:
         return None
     n, p, run = model.n, model._p, model._run_state
     buf = run["buf"]
