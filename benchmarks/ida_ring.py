@@ -4,7 +4,9 @@ For each N the ring ``pfaff.models.rolling_ring(N, force=True, family=True)`` (M
 F = 2, θ(0) = 0.3 at rest) is compiled once and simulated over one second by
 ``method="projection"`` and ``method="ida"`` (the family's sparse Newton matrix,
 :mod:`pfaff.numeric.ggl`), interleaved, ``--repeat`` times each; the table gives the median CPU
-time of each (``time.process_time``: the machine is shared), their ratio, IDA's steps and
+time of each (``time.process_time``: the machine is shared), their ratio, the model's first IDA
+run ("ida 1st": it also finds the Newton matrix's pattern and band plan, which the model then
+keeps for its later runs, :class:`pfaff.numeric.gglshape.NewtonShape`), IDA's steps and
 factorizations, and the error of θ_1(1) against the closed form θ(1) = θ(0) + F/(4Mr) for both.
 An IDA run is capped at ``--cap`` seconds (``max_seconds``; "cap" in the table).
 
@@ -110,8 +112,9 @@ def main() -> None:
     args = ap.parse_args()
     print(f"load average {os.getloadavg()}, OPENBLAS_NUM_THREADS="
           f"{os.environ.get('OPENBLAS_NUM_THREADS')}")  # fmt: skip
-    head = ("N", "proj s", "ida s", "ida/proj", "ida steps", "factor.", "proj err", "ida err")
-    print("{:>7} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9} {:>9}".format(*head))
+    head = ("N", "proj s", "ida s", "ida/proj", "ida 1st", "ida steps", "factor.", "proj err",
+            "ida err")  # fmt: skip
+    print("{:>7} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9} {:>9}".format(*head))
     # imports, caches, and numba's band LU (loaded once per process from WARM members on)
     warm = pfaff.models.rolling_ring(WARM, force=True, family=True).equations()
     warm = warm.compile({"M": M_, "r": R_, "F": F_})
@@ -130,7 +133,8 @@ def main() -> None:
         last = ida[-1]
         status = "" if last[3] == "success" else f"  ({last[3]})"
         print(
-            f"{n:>7} {tp:>9.3f} {ti:>9.3f} {ti / tp:>9.1f} {last[1].get('steps', 0):>9} "
+            f"{n:>7} {tp:>9.3f} {ti:>9.3f} {ti / tp:>9.1f} {ida[0][0]:>9.3f} "
+            f"{last[1].get('steps', 0):>9} "
             f"{last[1].get('njev', 0):>8} {proj[-1][2]:>9.1e} {last[2]:>9.1e}{status}",
             flush=True,
         )

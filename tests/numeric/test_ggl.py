@@ -70,3 +70,58 @@ def test_residual_vanishes_on_the_ring_motion(ring) -> None:
     expected = 1.3 * 0.5 / N * (5.0 * np.cos(theta) - 2 * 2.0 * np.sin(theta))
     np.testing.assert_allclose(J[g.n, g.n + 1 : 2 * g.n], expected, rtol=1e-6, atol=1e-9)
     assert J[g.n, g.n] == pytest.approx(5.0 * 1.3)
+
+
+def test_scaled_algebraic_unknowns_are_the_same_equations(ring) -> None:
+    """Unknowns λ/s, μ/s (s a power of 2): the same residual to the last bit, and J's λ and μ
+    columns exactly s times the unscaled ones (its other columns unchanged)."""
+    rng = np.random.default_rng(3)
+    y, yp = _consistent(ring, 0.4, 1.5)
+    y += 0.1 * rng.standard_normal(y.size)
+    s = 2.0**70
+    plain = GGLNewton(ring, np.arange(N), 0.0, y, yp)
+    ys = y.copy()
+    ys[2 * plain.n :] /= s
+    scaled = GGLNewton(ring, np.arange(N), 0.0, ys, yp, algebraic_scale=s)
+    r0, r1 = np.empty(plain.size), np.empty(plain.size)
+    plain.residual(0.0, y, yp, r0)
+    scaled.residual(0.0, ys, yp, r1)
+    np.testing.assert_array_equal(r1, r0)
+    J0 = plain.matrix(0.0, y, yp, 21.0).toarray()
+    J1 = scaled.matrix(0.0, ys, yp, 21.0).toarray()
+    cols = np.ones(plain.size)
+    cols[2 * plain.n :] = s
+    np.testing.assert_array_equal(J1, J0 * cols)
+    # the preconditioner solves for the scaled unknowns: s times smaller λ and μ parts
+    scaled.factor(0.0, ys, yp, r1, 21.0)
+    plain.factor(0.0, y, yp, r0, 21.0)
+    z0, z1 = np.empty(plain.size), np.empty(plain.size)
+    plain.precondition(0.0, y, yp, r0, r0, z0, 21.0, 0.0)
+    scaled.precondition(0.0, ys, yp, r1, r1, z1, 21.0, 0.0)
+    np.testing.assert_allclose(z1 * cols, z0, rtol=1e-9, atol=1e-12 * np.abs(z0).max())
+
+
+def test_runs_of_one_model_share_its_pattern_not_their_factors() -> None:
+    """The pattern and band plan are made once per model (ModelValue.derived); each run's
+    factors are its own: factoring one leaves the other's solve as it was."""
+    model = pfaff.models.rolling_ring(4096, force=True, family=True).equations()
+    model = model.compile({"M": 1.0, "r": 0.5, "F": 2.0})
+    q, qd = pfaff.models.ring_state(4096, radius=0.5, theta=0.2)
+    runs = [model.for_run(), model.for_run()]
+    qdd, lam = runs[0].solve(0.0, q, qd)
+    y = np.concatenate([q, qd, lam, np.zeros(4096)])
+    yp = np.concatenate([qd, qdd, np.zeros(2 * 4096)])
+    a, b = (GGLNewton(r, np.arange(4096), 0.0, y, yp) for r in runs)
+    assert a.shape is b.shape and a.band is not None and a.band is not b.band
+    assert not a.shape.slot.flags.writeable and not a.band.order.flags.writeable
+    res = np.empty(a.size)
+    a.factor(0.0, y, yp, res, 10.0)
+    r = np.random.default_rng(5).standard_normal(a.size)
+    za = a.band.solve(r)
+    b.factor(0.0, y, yp, res, 1000.0)  # another c_j: another matrix, in b's own storage
+    np.testing.assert_array_equal(a.band.solve(r), za)
+    J = a.matrix(0.0, y, yp, 10.0)
+    assert np.abs(J @ za - r).max() < 1e-8 * np.abs(J).max() * np.abs(za).max()
+    # another parameter value is another model: its own pattern
+    other = model.with_parameters({"F": 3.0}).for_run()
+    assert GGLNewton(other, np.arange(4096), 0.0, y, yp).shape is not a.shape

@@ -29,7 +29,11 @@ against 43 steps, 11.5 s; CPU, the machine busy) but chooses its
 own pivots by magnitude with no ordering option: where they fill in, SuperLU_MT runs out of its
 preallocated storage and aborts the process (the ring of 1024 before the x row was weighted),
 where SciPy raises an error a run can report. ``ida_jacobian`` given: the dense path, for any
-model (refused by size as before).
+model (refused by size as before). The sparse path's unknowns are λ/s and μ/s
+(:func:`algebraic_scale`) under one scalar absolute tolerance: the same weights as the
+tolerance vector with 1e12 on λ and μ, which scikit-sundae checks entry by entry in Python
+(0.12 s at 2^16 members); the Newton matrix's pattern and band plan are the model's, made at its
+first IDA run (:class:`pfaff.numeric.gglshape.NewtonShape`, 0.25 s at 2^16).
 """
 
 from __future__ import annotations
@@ -56,6 +60,21 @@ STALL_FRACTION = 1e-6  # near t = 0, the ulps are those of this fraction of the 
 EPS = float(np.finfo(float).eps)
 FIRST_ERROR = 0.25  # the first step's estimated local error, in units of the tolerance
 FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite differences
+ALGEBRAIC_ATOL = 1e12  # λ's and μ's absolute tolerance: out of IDA's error test
+
+
+def algebraic_scale(atol: float) -> float:
+    """s of the sparse path's unknowns λ/s and μ/s (:class:`pfaff.numeric.ggl.GGLNewton`): the
+    power of 2 nearest ``ALGEBRAIC_ATOL / atol``, so that the scalar tolerance ``atol`` gives
+    them the weight that ``ALGEBRAIC_ATOL`` gives λ and μ (``atol`` > 0).
+
+    Examples
+    --------
+    >>> s = algebraic_scale(1e-11)
+    >>> s == 2.0**76, 0.7 < s * 1e-11 / ALGEBRAIC_ATOL < 1.42
+    (True, True)
+    """
+    return float(2.0 ** round(np.log2(ALGEBRAIC_ATOL / atol)))
 
 
 def first_step(
@@ -161,15 +180,19 @@ class IDAStepper(Stepper):
         yp0 = np.concatenate([qd0, qdd0, np.zeros(m + mh)])
         self._ref, self._ref_h = np.zeros(m), np.zeros(mh)  # rows' largest sizes so far
         alg = np.arange(2 * n, self.size)  # (an array: scikit-sundae checks each entry)
-        atol = np.full(self.size, float(opts.atol))
-        atol[alg] = 1e12  # algebraic variables: out of the error test
+        atol: np.ndarray | float = np.full(self.size, float(opts.atol))
+        atol[alg] = ALGEBRAIC_ATOL  # algebraic variables: out of the error test
         kw = opts.step_sizes()
         # a family: the sparse Newton matrix (numeric.ggl), factored by SuperLU as the exact
         # preconditioner of IDA's GMRES; else (or when ida_jacobian asks) the dense one
         sparse = not opts.ida_jacobian and not model.mass_singular and model.sparse_dae
         if sparse:
             refuse_sparse_ida(self.size, n)  # before anything N-long is made (integrate.feasible)
-            newton = model.dae_newton(self.hrows, t0, y0, yp0)
+            scale = 1.0
+            if float(opts.atol) > 0:  # λ/s and μ/s, one scalar tolerance: the same weights
+                atol, scale = float(opts.atol), algebraic_scale(float(opts.atol))
+                y0[2 * n :] /= scale
+            newton = model.dae_newton(self.hrows, t0, y0, yp0, algebraic_scale=scale)
             precond = IDAPrecond(newton.factor, newton.precondition)
             resfn, jacfn = newton.residual, None
             kw |= {"linsolver": "gmres", "precond": precond}
@@ -299,12 +322,13 @@ class IDAStepper(Stepper):
 
     def endpoints(self) -> tuple[tuple[float, np.ndarray, np.ndarray], ...]:
         """(t, y, ẏ) of q and v at both ends of the last internal step (IDA's own y and y′)."""
+        return tuple((t, y.copy(), yp.copy()) for t, y, yp in self._ends())
+
+    def _ends(self) -> tuple[tuple[float, np.ndarray, np.ndarray], ...]:
+        """:meth:`endpoints` as views, for reading only (the work integral)."""
         n2 = 2 * self.n
         a, b = self._previous, self._last
-        return (
-            (float(a.t), a.y[:n2].copy(), a.yp[:n2].copy()),
-            (float(b.t), b.y[:n2].copy(), b.yp[:n2].copy()),
-        )
+        return ((float(a.t), a.y[:n2], a.yp[:n2]), (float(b.t), b.y[:n2], b.yp[:n2]))
 
     @staticmethod
     def _call(fn: Callable, *args: object, **kw: object) -> Any:
@@ -320,12 +344,12 @@ class IDAStepper(Stepper):
 
     def step_work(self, power: Power) -> float:
         """∫ P dt over the last internal step (see :func:`pfaff.integrate.work.hermite_work`)."""
-        ends = self.endpoints()
+        ends = self._ends()
         return hermite_work(ends, power, ends[0][0], ends[1][0])
 
     def work_until(self, power: Power, b: float) -> float:
         """∫ P dt from the start of the last internal step to ``b`` inside it (Hermite)."""
-        ends = self.endpoints()
+        ends = self._ends()
         return hermite_work(ends, power, ends[0][0], b)
 
     def step(self) -> None:

@@ -374,10 +374,14 @@ class StreamModel(Quantities, ModelValue):
         A = self._jacobian(avals)
         return self._mass(mvals), A, forcing, f, b + A @ qd
 
-    def dae_newton(self, hrows: np.ndarray, t: float, y: np.ndarray, yp: np.ndarray) -> GGLNewton:
+    def dae_newton(
+        self, hrows: np.ndarray, t: float, y: np.ndarray, yp: np.ndarray,
+        algebraic_scale: float = 1.0,
+    ) -> GGLNewton:  # fmt: skip
         """The stabilized index-2 residual over the streams and its sparse Newton matrix
-        (:class:`pfaff.numeric.ggl.GGLNewton`), its pattern made at the state (t, y, y')."""
-        return GGLNewton(self, hrows, t, y, yp)
+        (:class:`pfaff.numeric.ggl.GGLNewton`), its pattern made at the state (t, y, y') the
+        first time a model is asked (then shared by its runs)."""
+        return GGLNewton(self, hrows, t, y, yp, algebraic_scale=algebraic_scale)
 
     def evaluate_states(
         self, t: np.ndarray, q: np.ndarray, qd: np.ndarray

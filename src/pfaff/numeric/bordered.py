@@ -129,7 +129,15 @@ class BorderedBand:
             return None
         plan = cls(size, border, keep[perm], kl, ku)
         plan.positions = plan._positions(rows, cols, inner, local, rank)
+        for a in (plan.border, plan.order, plan.positions):
+            a.flags.writeable = False  # (shared by the runs of a model: NewtonShape)
         return plan
+
+    def fresh(self) -> BorderedBand:
+        """The same plan (its read-only arrays shared) with no factors yet: a run's own."""
+        band = type(self)(self.size, self.border, self.order, self.kl, self.ku)
+        band.positions = self.positions
+        return band
 
     def _positions(
         self, rows: np.ndarray, cols: np.ndarray, inner: np.ndarray, local: np.ndarray,
@@ -257,14 +265,15 @@ def _kernels() -> ModuleType | None:
 def _load_bandlu() -> ModuleType:
     from pfaff.numeric import bandlu
 
-    # one call of each with the argument types of the runs (IDA's vectors are read-only)
+    # one call of each with the argument types of the runs (IDA's vectors and the plan's index
+    # arrays are read-only)
     ab, piv, one = np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.ones(1)
-    fixed = np.ones(1)
-    fixed.flags.writeable = False
+    fixed, index = np.ones(1), np.zeros(1, dtype=np.int64)
+    fixed.flags.writeable = index.flags.writeable = False
     bandlu.band_factor(ab, 0, 0, piv)
     bandlu.band_split(ab, 0, 0, ab[:, :0], ab)
     bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
-    bandlu.sum_into(one, piv, one)
-    bandlu.gather(one, fixed, piv)
-    bandlu.scatter_border(one, one, ab, one, piv, piv, piv)
+    bandlu.sum_into(one, index, one)
+    bandlu.gather(one, fixed, index)
+    bandlu.scatter_border(one, one, ab, one, index, index, piv)
     return bandlu

@@ -207,10 +207,12 @@ class DynamicsModel(Protocol):
         """(M, A, Q − h, f, g) for a DAE residual: M (n, n) and A (m, n) dense or sparse."""
         ...
 
-    def dae_newton(self, hrows: Vector, t: float, y: Vector, yp: Vector) -> object:
-        """The stabilized index-2 DAE over y = [q, v, λ, μ] (μ per row of ``hrows``): an object
-        with ``size``, ``pattern`` (CSC), ``residual(t, y, y', res)`` and
-        ``jacobian(t, y, y', res, c_j, data)`` (:class:`pfaff.numeric.ggl.GGLNewton`)."""
+    def dae_newton(
+        self, hrows: Vector, t: float, y: Vector, yp: Vector, algebraic_scale: float = 1.0
+    ) -> object:
+        """The stabilized index-2 DAE over y = [q, v, λ/s, μ/s] (μ per row of ``hrows``, s the
+        ``algebraic_scale``): an object with ``size``, ``pattern`` (CSC), ``residual(t, y, y',
+        res)`` and ``jacobian(t, y, y', res, c_j, data)`` (:class:`pfaff.numeric.ggl.GGLNewton`)."""
         ...
 
     def power_function(self) -> Power:

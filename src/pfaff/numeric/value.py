@@ -11,6 +11,9 @@ its parameter values; after that:
   buffer, the inputs' values) lives in a *run copy* (:meth:`ModelValue.for_run`), which shares
   the parts; ``simulate`` makes one per run, so nothing a run does is seen by the user's model;
 - :meth:`ModelValue.with_parameters` makes another model from the same parts;
+- what depends on the parts alone and is costly to find (IDA's sparse pattern and band plan of a
+  family) is made once per model by :meth:`ModelValue.derived` and shared by its run copies,
+  never changed after; another parameter value or an unpickled copy makes its own;
 - ``pickle`` carries the parts and the parameter values, not per-run or per-N work arrays;
   generated code travels as its source (:mod:`pfaff.numeric.generated`), machine code as
   SymEngine pickles it.
@@ -26,9 +29,10 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import threading
 import types
-from collections.abc import Iterator, Mapping
-from typing import Any, Self
+from collections.abc import Callable, Hashable, Iterator, Mapping
+from typing import Any, Self, TypeVar
 
 import numpy as np
 
@@ -45,6 +49,8 @@ def _controller() -> Any:
 
 
 _depth = [0]
+_derived_lock = threading.RLock()
+T = TypeVar("T")
 
 
 @functools.cache
@@ -101,11 +107,31 @@ class ModelValue:
         object.__setattr__(self, "parameters", types.MappingProxyType(dict(self.parameters)))
         object.__setattr__(self, "_p", tuple(self.parameters.values()))
         object.__setattr__(self, "_run_state", self._new_run_state())
+        object.__setattr__(self, "_derived", {})
         object.__setattr__(self, "_frozen", True)
 
     def _new_run_state(self) -> dict:
         """The per-run state: KKT mode, ρ, the machine code's last state, scratch buffers."""
         return {"full": False, "rho": 0.0, "last": None, "live": False, "rows": None}
+
+    def derived(self, key: Hashable, make: Callable[[], T]) -> T:
+        """A structure found from this model's parts alone, made by ``make()`` the first time
+        ``key`` is asked for and shared after that by the model and its run copies (it must
+        not be changed by its users). Threads asking at once wait for one ``make``.
+
+        Examples
+        --------
+        >>> import pfaff
+        >>> model = pfaff.models.pendulum().equations().compile({"m": 1, "g": 9.81, "L": 1})
+        >>> first = model.derived("names", lambda: tuple(model.coordinate_names))
+        >>> model.for_run().derived("names", lambda: ()) is first
+        True
+        """
+        memo = self._derived
+        with _derived_lock:
+            if key not in memo:
+                memo[key] = make()
+            return memo[key]
 
     # ------------------------------------------------------------------ runs
     def for_run(self) -> Self:
@@ -263,7 +289,7 @@ class ModelValue:
 
     def _unpickled(self) -> set[str]:
         """Fields not pickled: per-run state and work arrays, remade on unpickling."""
-        return {"_run_state", "stats"}
+        return {"_run_state", "stats", "_derived"}
 
     def __setstate__(self, state: dict) -> None:
         object.__setattr__(self, "_frozen", False)
@@ -288,3 +314,4 @@ class ModelValue:
 
     _p: tuple | list = ()
     _run_state: dict = {}  # noqa: RUF012 (replaced per instance by _freeze)
+    _derived: dict = {}  # noqa: RUF012 (likewise)
