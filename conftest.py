@@ -12,10 +12,17 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import tempfile
 from collections.abc import Iterator
 
 import pytest
+
+# An environment may set PYTHONDONTWRITEBYTECODE (this machine's does): the test session writes
+# bytecode anyway, so that pytest's rewritten test modules and pfaff's compiled modules are read
+# back by the next run, by the other workers and by the CLI subprocesses the tests start, not
+# compiled again by each (about 5 s of assertion rewriting per worker)
+sys.dont_write_bytecode = False
 
 _HOME = pytest.StashKey[str]()  # the run's cache home (XDG_CACHE_HOME)
 _MADE = pytest.StashKey[bool]()  # made by this process (removed by it at the end)
