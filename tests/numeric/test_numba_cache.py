@@ -1,5 +1,6 @@
-"""numba's on-disk cache is kept only while pfaff's sources are those it was written from
-(:func:`pfaff.numeric.numbacode.fresh`): numba itself checks only the function's own file."""
+"""numba's on-disk cache is kept only while the sources a function is made from are those it was
+written from (:func:`pfaff.numeric.numbacode.fresh`): numba itself checks only the function's own
+file."""
 
 from __future__ import annotations
 
@@ -39,11 +40,30 @@ def test_the_cache_is_emptied_when_the_sources_change(
     try:
         assert _hits(fn) == (0, 1)  # compiled and saved
         stamps = list((tmp_path / "__pycache__").glob("*.pfaff-sources"))
-        assert [p.read_text() for p in stamps] == [numbacode.source_digest()]
+        assert [p.read_text() for p in stamps] == [numbacode.source_digest("cached_twice")]
         assert _hits(fn) == (1, 0)  # the same sources: loaded
-        monkeypatch.setattr(numbacode, "source_digest", lambda: "other sources")
+        monkeypatch.setattr(numbacode, "source_digest", lambda module: "other sources")
         assert _hits(fn) == (0, 1)  # other sources: compiled anew, not loaded
         assert stamps[0].read_text() == "other sources"
         assert _hits(fn) == (1, 0)
     finally:
         sys.modules.pop("cached_twice", None)
+
+
+def test_the_sources_of_a_module_are_the_pfaff_modules_it_imports() -> None:
+    """The stepping loop's entry is made from its own module and the pfaff modules it imports,
+    at the top or inside a function, transitively: not from the stages above it."""
+    src = Path(numbacode.__file__).resolve().parents[1]
+    names = {
+        p.relative_to(src).as_posix() for p in numbacode._sources("pfaff.integrate.loopkernel")
+    }
+    assert {"integrate/loopkernel.py", "integrate/loopbase.py", "integrate/fastrk.py",
+            "numeric/numbacode.py", "integrate/stepper.py"} <= names  # fmt: skip
+    assert not {n for n in names if n.split("/")[0] in {"api", "cli", "derive", "models"}}
+    assert "numeric/ggl.py" not in names  # (not imported: an edit there keeps the loop's cache)
+    for path in names:  # each one is imported by another one or is the module itself
+        stem = "pfaff." + path.removesuffix(".py").removesuffix("/__init__").replace("/", ".")
+        if path != "integrate/loopkernel.py":
+            text = " ".join((src / p).read_text() for p in names if p != path)
+            assert stem in text or stem.rsplit(".", 1)[0] in text, path
+    assert numbacode.source_digest("pfaff.numeric.bandlu") != numbacode.source_digest("pfaff")
