@@ -82,7 +82,8 @@ def band_split(
     ab: np.ndarray, kl: int, ku: int, lower: np.ndarray, upper: np.ndarray
 ) -> None:  # pragma: no cover
     """The factors of :func:`band_factor` in two compact arrays for the solves: ``lower[j, i]``
-    the multiplier of row j + i + 1 by row j, ``upper[j, 0]`` U's diagonal and ``upper[j, i]``
+    the multiplier of row j + i + 1 by row j, ``upper[j, 0]`` the reciprocal of U's diagonal
+    (a multiplication in the solves' chain of dependent updates, not a division) and ``upper[j, i]``
     U[j − i, j], i up to ``upper.shape[1] − 1``, U's actual upper bandwidth (ku without row
     interchanges: most of ab's 2 kl + ku + 1 places are then never read)."""
     n = ab.shape[0]
@@ -90,7 +91,8 @@ def band_split(
     for j in range(n):
         for i in range(kl):
             lower[j, i] = ab[j, kv + 1 + i]
-        for i in range(upper.shape[1]):
+        upper[j, 0] = 1.0 / ab[j, kv]
+        for i in range(1, upper.shape[1]):
             upper[j, i] = ab[j, kv - i]
 
 
@@ -112,10 +114,10 @@ def band_solve(
             for i in range(lm):
                 b[c, j + 1 + i] -= lower[j, i] * bj
     for j in range(n - 1, -1, -1):  # U
-        d = upper[j, 0]
+        r = upper[j, 0]
         top = min(ue, j)
         for c in range(k):
-            bj = b[c, j] / d
+            bj = b[c, j] * r
             b[c, j] = bj
             for i in range(1, top + 1):
                 b[c, j - i] -= upper[j, i] * bj
