@@ -117,6 +117,7 @@ def test_runs_of_one_model_share_its_pattern_not_their_factors() -> None:
     res = np.empty(a.size)
     a.factor(0.0, y, yp, res, 10.0)
     r = np.random.default_rng(5).standard_normal(a.size)
+    r.flags.writeable = False  # (as IDA's vectors: the compiled gather's one signature)
     za = a.band.solve(r)
     b.factor(0.0, y, yp, res, 1000.0)  # another c_j: another matrix, in b's own storage
     np.testing.assert_array_equal(a.band.solve(r), za)

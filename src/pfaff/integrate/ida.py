@@ -30,8 +30,8 @@ own pivots by magnitude with no ordering option: where they fill in, SuperLU_MT 
 preallocated storage and aborts the process (the ring of 1024 before the x row was weighted),
 where SciPy raises an error a run can report. ``ida_jacobian`` given: the dense path, for any
 model (refused by size as before). The sparse path's unknowns are λ/s and μ/s
-(:func:`algebraic_scale`) under one scalar absolute tolerance: the same weights as the
-tolerance vector with 1e12 on λ and μ, which scikit-sundae checks entry by entry in Python
+(:func:`algebraic_scale`) under one scalar absolute tolerance: weights within a factor √2 of
+those of the tolerance vector with 1e12 on λ and μ, which scikit-sundae checks entry by entry in Python
 (0.12 s at 2^16 members); the Newton matrix's pattern and band plan are the model's, made at its
 first IDA run (:class:`pfaff.numeric.gglshape.NewtonShape`, 0.25 s at 2^16).
 """
@@ -63,18 +63,22 @@ FD_LIMIT = 80  # unknowns up to which IDA builds its Newton matrix by finite dif
 ALGEBRAIC_ATOL = 1e12  # λ's and μ's absolute tolerance: out of IDA's error test
 
 
-def algebraic_scale(atol: float) -> float:
+def algebraic_scale(atol: float) -> float | None:
     """s of the sparse path's unknowns λ/s and μ/s (:class:`pfaff.numeric.ggl.GGLNewton`): the
     power of 2 nearest ``ALGEBRAIC_ATOL / atol``, so that the scalar tolerance ``atol`` gives
-    them the weight that ``ALGEBRAIC_ATOL`` gives λ and μ (``atol`` > 0).
+    them a weight within a factor √2 of the one ``ALGEBRAIC_ATOL`` gives λ and μ; None where
+    ``atol`` is not positive or so small that s is not a float (the tolerance vector then).
 
     Examples
     --------
     >>> s = algebraic_scale(1e-11)
-    >>> s == 2.0**76, 0.7 < s * 1e-11 / ALGEBRAIC_ATOL < 1.42
-    (True, True)
+    >>> s == 2.0**76, 0.7 < s * 1e-11 / ALGEBRAIC_ATOL < 1.42, algebraic_scale(1e-300)
+    (True, True, None)
     """
-    return float(2.0 ** round(np.log2(ALGEBRAIC_ATOL / atol)))
+    if not atol > 0:
+        return None
+    exponent = round(np.log2(ALGEBRAIC_ATOL) - np.log2(atol))
+    return float(2.0**exponent) if exponent < 1000 else None
 
 
 def first_step(
@@ -188,9 +192,11 @@ class IDAStepper(Stepper):
         sparse = not opts.ida_jacobian and not model.mass_singular and model.sparse_dae
         if sparse:
             refuse_sparse_ida(self.size, n)  # before anything N-long is made (integrate.feasible)
-            scale = 1.0
-            if float(opts.atol) > 0:  # λ/s and μ/s, one scalar tolerance: the same weights
-                atol, scale = float(opts.atol), algebraic_scale(float(opts.atol))
+            scale = algebraic_scale(float(opts.atol))  # λ/s and μ/s, one scalar tolerance
+            if scale is None:
+                scale = 1.0
+            else:
+                atol = float(opts.atol)
                 y0[2 * n :] /= scale
             newton = model.dae_newton(self.hrows, t0, y0, yp0, algebraic_scale=scale)
             precond = IDAPrecond(newton.factor, newton.precondition)

@@ -47,7 +47,8 @@ from pfaff.numeric.numbacode import cached
 
 @cached
 def band_factor(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:  # pragma: no cover
-    """LU in place (``dgbtf2``); returns 0, or j + 1 where column j has no nonzero pivot."""
+    """LU in place (``dgbtf2``); returns 0, or j + 1 where column j has no pivot whose
+    reciprocal is finite (zero or subnormal)."""
     n = ab.shape[0]
     kv = kl + ku
     ju = 0
@@ -58,7 +59,7 @@ def band_factor(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:  # pr
             if abs(ab[j, kv + p]) > big:
                 jp, big = p, abs(ab[j, kv + p])
         piv[j] = j + jp
-        if big == 0.0:
+        if not 1.0 / big < np.inf:  # zero, or too small for its reciprocal (band_split's)
             return j + 1
         ju = max(ju, min(j + ku + jp, n - 1))
         if jp != 0:  # interchange rows j and j + jp in columns j … ju

@@ -262,8 +262,8 @@ class GGLNewton:
         """J as a SciPy CSC matrix, shape (size, size) (for checks)."""
         data = np.empty(self.nnz)
         self.jacobian(t, y, yp, np.empty(0), cj, data)
-        p = self.pattern
-        return sps.csc_matrix((data, p.indices, p.indptr), shape=p.shape)
+        p = self.pattern  # (its index arrays are the shared, read-only ones: copied)
+        return sps.csc_matrix((data, p.indices.copy(), p.indptr.copy()), shape=p.shape)
 
     def _terms(self, t: float, y: np.ndarray, yp: np.ndarray, cj: float) -> tuple[list, list]:
         """Every term of J: where it goes (row offset, row index set, column offset, column

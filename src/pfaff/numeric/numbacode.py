@@ -3,8 +3,8 @@
 ``cached`` and ``helper`` (numba's compilation of a function, with or without its own entry in
 numba's on-disk cache) and ``call_entry`` (a call through a C entry point
 ``void *f(double *out, const double *in, void *data)``, SymEngine's LLVM functions':
-:func:`pfaff.numeric.machineloop.entry_point`); ``fresh`` (a cache entry dropped when pfaff's
-sources changed). Used by the band LU (:mod:`pfaff.numeric.bandlu`), the compiled
+:func:`pfaff.numeric.machineloop.entry_point`); ``fresh`` (a cache entry dropped when the
+module's sources changed). Used by the band LU (:mod:`pfaff.numeric.bandlu`), the compiled
 passes of long arrays (:mod:`pfaff.numeric.jit`) and the compiled stepping loop
 (:mod:`pfaff.integrate.loopkernel`).
 """
@@ -41,18 +41,12 @@ def cached(fn, **options):
         return njit(error_model="numpy", **options)(fn)
 
 
-_IMPORT = re.compile(
-    r"^[ \t]*(?:from[ \t]+(pfaff(?:\.\w+)*)[ \t]+import[ \t]+([\w, ()]+)|import[ \t]+(pfaff(?:\.\w+)*))",
-    re.MULTILINE,
-)
-
-
 @functools.cache
 def source_digest(module: str = "pfaff") -> str:
     """SHA-256 of the sources ``module`` is made from: its file and, through every ``pfaff``
-    import in them (at the top or inside a function), the files of the pfaff modules it
-    imports, transitively (a package's ``__init__`` counted, its re-exports not followed).
-    ``"pfaff"``: every source file. About 1 ms, once per module and process.
+    import in them (at the top or inside a function, :func:`_imported`), the files
+    of the pfaff modules it imports, transitively (a package's ``__init__`` counted, its
+    re-exports not followed). ``"pfaff"``: every source file. Once per module and process.
 
     Examples
     --------
@@ -83,17 +77,47 @@ def _sources(module: str) -> set[Path]:
         if not path.is_file() or path in seen:
             continue  # (a name imported from a module, not a module itself)
         seen.add(path)
-        if package and name != module:
-            continue
-        for source, names, whole in _IMPORT.findall(path.read_text(encoding="utf-8")):
-            todo.append(source or whole)
-            todo.extend(f"{source}.{n}" for n in re.findall(r"\w+", names) if source)
+        if not package or name == module:
+            todo.extend(_imported(path, name if package else name.rpartition(".")[0]))
     return seen
 
 
+_FROM = re.compile(r"^[ \t]*from[ \t]+(\.*)([\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[^\n#;]+)", re.M)
+_IMPORT = re.compile(r"^[ \t]*import[ \t]+([^\n#;]+)", re.M)
+
+
+def _imported(path: Path, package: str) -> list[str]:
+    r"""The pfaff modules (and names from them) that the file ``path`` of ``package`` imports,
+    anywhere in it: ``import a, b as c``, ``from a import (b, c)`` over several lines, relative
+    imports, backslash continuations (read from the text: parsing the 23 files of the stepping
+    loop would take 0.15 s of every process that loads it).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> text = "import os, pfaff.a as x\nfrom pfaff.b import (\n    c,\n    d as e,\n)\n"
+    >>> text += "def f():\n    from .g import h\n"
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     _ = (Path(tmp) / "m.py").write_text(text)
+    ...     sorted(_imported(Path(tmp) / "m.py", "pfaff.p"))
+    ['pfaff.a', 'pfaff.b', 'pfaff.b.c', 'pfaff.b.d', 'pfaff.p.g', 'pfaff.p.g.h']
+    """
+    text = path.read_text(encoding="utf-8").replace("\\\n", " ")
+    out = []
+    for names in _IMPORT.findall(text):
+        out += [n.split()[0] for n in names.split(",") if n.strip()]
+    for dots, source, names in _FROM.findall(text):
+        if dots:  # relative: from the package's own place
+            parts = package.split(".")
+            source = ".".join([*parts[: len(parts) - len(dots) + 1], source]).strip(".")
+        words = [n.split()[0] for n in names.strip("()").split(",") if n.strip()]
+        out += [source] + [f"{source}.{w}" for w in words]
+    return [m for m in out if m == "pfaff" or m.startswith("pfaff.")]
+
+
 def fresh(dispatcher):
-    """``dispatcher`` (a cached numba function), its cache emptied first if pfaff's sources
-    changed since the cache was written.
+    """``dispatcher`` (a cached numba function), its cache emptied first if the sources of its
+    module (:func:`source_digest`) changed since the cache was written.
 
     numba keeps a cache entry while the function's own file keeps its time stamp and size and
     its bytecode is the same: a helper in another module, or a constant imported from one,

@@ -127,7 +127,9 @@ class ModelValue:
         >>> model.for_run().derived("names", lambda: ()) is first
         True
         """
-        memo = self._derived
+        memo = self.__dict__.get("_derived")
+        if memo is None:  # (a part made before the model was frozen: not remembered)
+            return make()
         with _derived_lock:
             if key not in memo:
                 memo[key] = make()
@@ -314,4 +316,4 @@ class ModelValue:
 
     _p: tuple | list = ()
     _run_state: dict = {}  # noqa: RUF012 (replaced per instance by _freeze)
-    _derived: dict = {}  # noqa: RUF012 (likewise)
+    _derived: dict | None = None  # (set per instance by _freeze)
