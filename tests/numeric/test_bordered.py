@@ -94,3 +94,26 @@ def test_singular_band_is_reported_and_wide_patterns_refused() -> None:
     grid = sps.csc_matrix(sps.kronsum(line, line))
     grid.sort_indices()
     assert BorderedBand.plan(grid, dense=10) is None
+
+
+@pytest.mark.parametrize("live", [[], [1], [0, 2], [0, 1, 3]])
+def test_the_border_scatter_against_numpy(live) -> None:
+    """z[order] = y − Xtᵀ zs over the live rows, z[border] = zs, for none, one, two (the pass's
+    own) and three live rows (one after the pass)."""
+    kernels = bordered._kernels()
+    if kernels is None:
+        pytest.skip("numba is not installed")
+    rng = np.random.default_rng(len(live))
+    nb, k = 50, 4
+    order = rng.permutation(nb).astype(np.int64)
+    border = np.arange(nb, nb + k, dtype=np.int64)
+    order.flags.writeable = border.flags.writeable = False
+    y, Xt, zs = rng.standard_normal(nb), np.zeros((k, nb)), rng.standard_normal(k)
+    rows = np.array(live, dtype=np.int64)
+    Xt[rows] = rng.standard_normal((rows.size, nb))
+    z = np.full(nb + k, np.nan)
+    kernels.scatter_border(z, y, Xt, zs, order, border, rows)
+    expected = np.empty(nb + k)
+    expected[order] = y - Xt.T @ zs
+    expected[border] = zs
+    np.testing.assert_allclose(z, expected, rtol=1e-14, atol=1e-14)

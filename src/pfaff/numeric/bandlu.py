@@ -150,11 +150,19 @@ def scatter_border(
     live: np.ndarray,
 ) -> None:  # pragma: no cover
     """z[order[p]] = y[p] − Σ_c Xt[c, p] zs[c] over the ``live`` rows c of Xt (the others are
-    zero), z[border] = zs: the bordered solve's end."""
-    for p in range(order.size):
-        v = y[p]
-        for c in live:
-            v -= Xt[c, p] * zs[c]
-        z[order[p]] = v
+    zero), z[border] = zs: the bordered solve's end. Two live rows in the one pass over p (a
+    loop over c inside it took 2.4 times as long on the ring's two), any others after it."""
+    n = order.size
+    first = live[0] if live.size > 0 else 0
+    second = live[1] if live.size > 1 else first
+    sa = zs[first] if live.size > 0 else 0.0
+    sb = zs[second] if live.size > 1 else 0.0
+    a, b = Xt[first], Xt[second]
+    for p in range(n):
+        z[order[p]] = y[p] - a[p] * sa - b[p] * sb
+    for i in range(2, live.size):
+        c = live[i]
+        for p in range(n):
+            z[order[p]] -= Xt[c, p] * zs[c]
     for c in range(zs.size):
         z[border[c]] = zs[c]
