@@ -49,9 +49,11 @@ def hermite_work(
     ts = a + (b - a) * (HERMITE_X + 1.0) / 2.0
     # the six Hermite weights at each node (floats), applied to the end values by one product
     W = [hermite5_weights((float(ti) - t0) / h, h) for ti in ts]
-    Y = np.column_stack([y0[:n], y0[n:], f0[n:], y1[:n], y1[n:], f1[n:]])
-    q, qd = Y @ np.array([w[0] for w in W]).T, Y @ np.array([w[1] for w in W]).T
-    p = [power(float(ti), q[:, i], qd[:, i]) for i, ti in enumerate(ts)]
+    Y = np.empty((6, n))  # (rows: contiguous copies, not a column stack's strided ones)
+    for row, part in zip(Y, (y0[:n], y0[n:], f0[n:], y1[:n], y1[n:], f1[n:]), strict=True):
+        row[:] = part
+    q, qd = np.array([w[0] for w in W]) @ Y, np.array([w[1] for w in W]) @ Y
+    p = [power(float(ti), q[i], qd[i]) for i, ti in enumerate(ts)]
     return 0.5 * (b - a) * checked_sum([w * v for w, v in zip(HERMITE_W, p, strict=True)], b)
 
 
