@@ -298,31 +298,41 @@ class _Dense(DenseOutput):
             c *= x if i % 2 == 0 else 1.0 - x
         return c
 
+    def _coefficients(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At time t: the weights of K's rows, of the extra stages, and of y₀, y and f."""
+        if self.solver.steps != self.step:
+            raise RuntimeError("the dense output of an earlier step (the stages have changed)")
+        c, h = self._weights((t - self.t_old) / self.h), self.h
+        a = c[0] - c[1] + 2.0 * c[2]
+        w = h * (c[3:] @ self.solver.D)
+        w[0] += h * (c[1] - c[2])
+        S = self.solver.n_stages + 1
+        return _rows(w[:S]), w[S:], np.array([1.0 - a, a, -c[2] * h])
+
+    def at(self, t: float, components: np.ndarray) -> np.ndarray:
+        """The interpolant at time t, at the given components only (shape (k,)): a few
+        columns of the stages read, not the whole state (the work integral's nodes where the
+        power reads few coordinates, :meth:`pfaff.integrate.integrators._RKStepper.work_until`)."""
+        s = self.solver
+        w, v, coefs = self._coefficients(float(t))
+        y = w @ s.K[:, components] + v @ s._extra[:, components]  # type: ignore[index]
+        for coef, x in zip(coefs, (self.y_old, self.y, self.f), strict=True):
+            y += coef * x[components]
+        return y
+
     def _call_impl(self, t: np.ndarray) -> np.ndarray:
         s = self.solver
-        if s.steps != self.step:
-            raise RuntimeError("the dense output of an earlier step (the stages have changed)")
         ts = np.atleast_1d(t)
         out = np.empty((len(ts), len(self.y_old)))
         for k, tk in enumerate(ts):
-            c, h = self._weights((float(tk) - self.t_old) / self.h), self.h
-            a = c[0] - c[1] + 2.0 * c[2]
-            w = h * (c[3:] @ s.D)
-            w[0] += h * (c[1] - c[2])
-            S = s.n_stages + 1
+            w, v, coefs = self._coefficients(float(tk))
             if s._jit is not None:
-                coefs = np.array([1.0 - a, a, -c[2] * h])
-                s._spans(
-                    _rows(w[:S]), s.K, w[S:], s._extra, coefs, self.y_old, self.y, self.f, out[k]
-                )
+                s._spans(w, s.K, v, s._extra, coefs, self.y_old, self.y, self.f, out[k])
                 continue
-            np.dot(_rows(w[:S]), s.K, out=out[k])
-            np.dot(w[S:], s._extra, out=s._stage)
+            np.dot(w, s.K, out=out[k])
+            np.dot(v, s._extra, out=s._stage)
             out[k] += s._stage
-            np.multiply(self.y_old, 1.0 - a, out=s._stage)
-            out[k] += s._stage
-            np.multiply(self.y, a, out=s._stage)
-            out[k] += s._stage
-            np.multiply(self.f, -c[2] * h, out=s._stage)
-            out[k] += s._stage
+            for coef, x in zip(coefs, (self.y_old, self.y, self.f), strict=True):
+                np.multiply(x, coef, out=s._stage)
+                out[k] += s._stage
         return out[0] if np.ndim(t) == 0 else out.T
