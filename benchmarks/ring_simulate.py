@@ -11,7 +11,7 @@ t_end/50) makes it a real run of many steps. The reported states are ``--points`
 
 Two paths, run alternately in fresh subprocesses (``--paths``; medians over ``--repeat``):
 ``inplace`` (the default for long states: :class:`pfaff.integrate.inplace.InPlaceDOP853`,
-stage sums on preallocated buffers) and ``scipy`` (SciPy's ``DOP853``, the path before it,
+stage sums on preallocated buffers, each one compiled pass over spans on the kernel threads) and ``scipy`` (SciPy's ``DOP853``, the path before it,
 selected by raising ``inplace.INPLACE_MIN``). ``--output`` streams the reported states to a
 netCDF file in ``--output-dir`` (``simulate(output=...)``, removed afterwards), so that only one
 state is held in memory: what 2^24 particles need (``--sizes 16777216 --output --paths
@@ -21,7 +21,31 @@ Columns: N; path; simulated seconds; wall and CPU seconds of ``simulate`` (CPU c
 accepted steps; right-hand-side evaluations; max constraint residual (max |f|, |A q̇ + b| over the
 reported states); max |x(t) - x0 - F t²/(4M)| (the closed form: ẍ = F/(2M)); friction error
 max |λ_1 + F/2|; peak RSS of the process when ``simulate`` returns (build included, the
-checks after it not). Run from the project root::
+checks after it not).
+
+Measured 2026-11-28 on the 2-core development machine (``--paths inplace``; the commit before
+the compiled stage passes, 8239fcc, against the one after them, run alternately in one session
+with ``OPENBLAS_NUM_THREADS=1``; medians; the 1-minute load 0.9–1.5, the runs' own threads
+included; the other sessions' benchmarks came and went, hence the spread)::
+
+         N  code     runs  wall s  CPU s   wall range   CPU range    residual  max x err
+   1048576  before     4    21.5    25.2   19.1–23.4    22.3–27.3    3.8e-15   6.7e-16
+   1048576  after      4    16.0    22.6   13.2–16.1    19.0–23.2    3.3e-15   8.9e-16
+   1048576  before     4    19.3    22.7   18.8–21.3    22.0–24.9    (another series)
+   1048576  after      4    14.0    20.3   13.5–15.0    19.9–21.8
+   1048576  before     3    20.5    20.4   20.0–21.9    19.9–21.8    PFAFF_KERNEL_THREADS=1
+   1048576  after      3    17.7    17.5   17.2–28.2    17.1–18.8    (one thread)
+     65536  before     5    1.82    1.82   1.48–1.88                 3.4e-15   0
+     65536  after      5    1.37    1.37   1.35–1.77                 3.7e-15   4.4e-16
+      4096  before     5    0.38    0.38                             4.3e-15   4.4e-16
+      4096  after      5    0.30    0.30                             4.3e-15   4.4e-16
+
+The same 51 steps and 644 right-hand sides; λ_1's error 6.0e-14 at 2^20 both; x's error is one or
+two units in the last place of x(1) ≈ 2.07 (4.4e-16) on both, the sums being ordered differently.
+At 2^20 the wall time is 26 % shorter and the CPU time 10 % (15 % on one thread): the stage sums
+(half of the CPU) run at one core's memory pace, and the second core halves their wall time.
+
+Run from the project root::
 
     python benchmarks/ring_simulate.py                    # N = 4096, 65536, 2^20, 1 s
     python benchmarks/ring_simulate.py --quick            # N = 4096, 65536, 0.2 s

@@ -122,3 +122,39 @@ def test_work_node_by_node(ring, monkeypatch):
     b = pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw)
     np.testing.assert_allclose(b.nc_work, a.nc_work, rtol=1e-14, atol=1e-16)
     np.testing.assert_allclose(b.nc_work, 2.0 * (b.q[:, 0] - q0[0]), rtol=1e-10, atol=1e-14)
+
+
+def test_dense_components_as_the_whole(sums):
+    """The interpolant at a few components (what the work integral's nodes read) equals the
+    whole dense output there, to rounding."""
+    b = InPlaceDOP853(_van_der_pol, 0.3, [1.5, -0.8], 8.0, into=_into, rtol=1e-8, atol=1e-10)
+    b.step()
+    dense = b.dense_output()
+    for t in (b.t_old, 0.3 * b.t_old + 0.7 * b.t, b.t):
+        np.testing.assert_allclose(dense.at(t, np.array([1])), dense(t)[1:], rtol=1e-14)
+        np.testing.assert_allclose(dense.at(t, np.array([0, 1])), dense(t), rtol=1e-14)
+
+
+def test_spans_and_threads(ring, monkeypatch, sums):
+    """The compiled sums over spans of 16 components: the same run to the last bit on one
+    thread and on two (the error norm's sums added span by span in order), and to rounding
+    the run of one span."""
+    from pfaff.numeric import streams
+
+    if sums != "compiled" or not HAVE_NUMBA:
+        pytest.skip("the spans are the compiled path's")
+    q0, qd0 = pfaff.models.ring_state(64, 0.5, theta=np.pi, theta_dot=0.7)
+    kw = dict(t_eval=[0.0, 0.13, 0.5], max_step=0.1)
+    monkeypatch.setattr(inplace, "INPLACE_MIN", 0)
+    whole = pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw)
+    monkeypatch.setattr(inplace, "SPAN", 16)
+    runs = []
+    for threads in (1, 2):
+        monkeypatch.setattr(streams, "THREADS", threads)
+        monkeypatch.setattr(streams, "PARALLEL_FROM", 0)
+        runs.append(pfaff.simulate(ring, q0, qd0, (0.0, 0.5), **kw))
+    one, two = runs
+    assert one.stats["steps"] == two.stats["steps"] == whole.stats["steps"]
+    for key in ("q", "qd", "nc_work"):
+        np.testing.assert_array_equal(getattr(two, key), getattr(one, key))
+        np.testing.assert_allclose(getattr(one, key), getattr(whole, key), rtol=1e-13, atol=1e-14)

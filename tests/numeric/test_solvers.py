@@ -103,6 +103,20 @@ def test_projection_is_mass_orthogonal(model: DynamicsModel) -> None:
     assert np.abs(f).max() < 1e-12 and np.abs(g).max() < 1e-12
 
 
+def test_projection_thresholds_from_the_row_norms(model: DynamicsModel) -> None:
+    """The projection's per-row thresholds are tol·clip(|A_i|/max|A_j|, 1e-4, 1) of the
+    assembled A's rows, at a first state and again at another (the ring's A is constant: a
+    family model keeps them for the run)."""
+    q, qd = _state()
+    A = _dense(model.constraint_matrix(0.0, q))
+    norms = np.linalg.norm(A, axis=1)
+    want = 1e-10 * np.clip(norms / norms.max(), 1e-4, 1.0)
+    run = model.for_run()
+    for theta in (0.7, 2.1):
+        q, qd = _state(theta=theta)
+        np.testing.assert_allclose(run.linearize_constraints(0.0, q, qd, 1e-10).thr, want)
+
+
 def test_model_project_is_the_projection(model) -> None:
     """``model.project`` at one state: the same algorithm and result as the integrators' Projector."""
     rng = np.random.default_rng(9)

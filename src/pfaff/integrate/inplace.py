@@ -14,11 +14,15 @@ usual ones. The results agree with SciPy's to rounding (the sums are ordered dif
 the same steps (``tests/integrate/test_inplace.py``); ``benchmarks/ring_scale.py --simulate``
 measures both.
 
-From 2n = :data:`JIT_MIN` on, two sums are compiled loops (:mod:`pfaff.integrate.inplacejit`,
-numba, when it loads): the solution y_new with both error estimates' sums of squares in one pass
-over K (48 ms → 25 ms at 2n = 2^21), and each dense-output value in one pass instead of six
-(48 ms → 35 ms). The stage states stay BLAS's ``np.dot`` then ``+= y``: a compiled loop was not
-faster there (19 ms against 15 ms at 2n = 2^21; both stream K at the memory's pace).
+From 2n = :data:`JIT_MIN` on, the sums are compiled loops (:mod:`pfaff.integrate.inplacejit`,
+numba, when it loads): each stage state y + h Σ a_sj K_j in one pass (BLAS's product and then
+``+= y`` were two), the solution y_new with both error estimates' sums of squares in one pass over
+K (48 ms → 25 ms at 2n = 2^21), each extra stage of the dense output and each dense-output value in
+one pass instead of six (48 ms → 35 ms). Every compiled sum runs over spans of :data:`SPAN`
+components handed to the kernel threads (:func:`pfaff.numeric.streams.in_spans`: on two threads
+from 2^20 components, the thread policy of :mod:`pfaff.numeric.streams`); a component is computed
+the same way on any thread, and the error norm's sums of squares are added span by span in order,
+so that a run's results do not depend on the thread count.
 
 The work integral of a step, h Σ b_i P(t_i, y_i), needs the stage states again; once the driver
 has asked for it (``stage_power``), the step evaluates P at each stage with b_i ≠ 0 while that
@@ -33,11 +37,13 @@ import numpy as np
 from scipy.integrate import DOP853, DenseOutput
 
 from pfaff.integrate import inplacejit
+from pfaff.numeric import streams
 
 SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0  # SciPy's step-size controller constants
 INPLACE_MIN = 4096  # state sizes (2n) from which the in-place path is taken
 JIT_MIN = 1 << 17  # ... and from which its sums are compiled loops (inplacejit; numba loaded)
 BLOCK = 1 << 13  # components per block of the error norm (K's block stays in L2)
+SPAN = streams.SPAN  # components per task of the compiled sums on the kernel threads
 INTERPOLATOR_POWER = 3 + DOP853.D.shape[0]  # the degree of DOP853's interpolant
 # The row of K each stage's derivative goes to. K_1 is read by stage 2 alone and K_2 by stages 3
 # and 4, and neither by the solution, the error estimate or the interpolant (their coefficients
@@ -109,7 +115,8 @@ class InPlaceDOP853(DOP853):
             self._norms = (0.0, 0.0)  # the last attempt's sums of squares (solution_and_error)
             self._E53u = np.ascontiguousarray(self._E53[:, : self._used])
             self._atol = np.atleast_1d(np.asarray(self.atol, dtype=float))
-            self._work = np.empty((4, inplacejit.BLOCK))
+            self._span = SPAN  # (read at build time: tests change it)
+            self._squares_of = np.zeros((2, -(-n // self._span)))  # per span: Σ (ε₅/s)², Σ (ε₃/s)²
             self._none, self._one = np.zeros(0), np.array([1.0, 0.0, 0.0])
 
     def _rhs(self, t: float, y: np.ndarray, out: np.ndarray) -> None:
@@ -131,9 +138,7 @@ class InPlaceDOP853(DOP853):
             self._rhs(ts, stage, K[ROW[s]])
         u = self._used
         if self._jit is not None:  # y_new and the error norm's sums in one pass
-            self._norms = self._jit[1](
-                h * self._B[:u], self._E53u, K, y, y_new, self._atol, self.rtol, self._work
-            )
+            self._solution_and_error(h * self._B[:u], y, y_new)
         else:
             np.dot(h * self._B[:u], K[:u], out=y_new)
             y_new += y
@@ -141,11 +146,33 @@ class InPlaceDOP853(DOP853):
         return terms
 
     def _stage_state(self, s: int, y: np.ndarray, h: float) -> None:
-        """The state of stage s, y + h Σ_j a_sj K_j, into the stage buffer (BLAS: at the
-        memory's pace already; a compiled loop was not faster, 19 ms against 15 ms at 2n = 2^21)."""
+        """The state of stage s, y + h Σ_j a_sj K_j, into the stage buffer: one compiled pass
+        over spans on the kernel threads, or BLAS's product and then ``+= y``."""
         u, stage = _reads(s), self._stage
+        if self._jit is not None:
+            self._spans(h * self._A[s, :u], self.K, self._none, self.K, self._one, y, y, y, stage)
+            return
         np.dot(h * self._A[s, :u], self.K[:u], out=stage)
         stage += y
+
+    def _spans(self, *args: object) -> None:
+        """:func:`pfaff.integrate.inplacejit.combine` over the spans of its output (the last
+        argument), on the kernel threads."""
+        fn = self._jit[0]  # type: ignore[index]
+        streams.in_spans(self.n, self._span, lambda lo, hi: fn(*args, lo, hi))
+
+    def _solution_and_error(self, b: np.ndarray, y: np.ndarray, y_new: np.ndarray) -> None:
+        """y_new = y + Σ b_i K_i and the error norm's sums of squares (``_norms``), span by span
+        on the kernel threads; the spans' sums added in their order (any thread count: the
+        same sums)."""
+        fn, parts, span = self._jit[1], self._squares_of, self._span  # type: ignore[index]
+        K, E, atol, rtol = self.K, self._E53u, self._atol, self.rtol
+
+        def part(lo: int, hi: int) -> None:
+            parts[:, lo // span] = fn(b, E, K, y, y_new, atol, rtol, lo, hi)
+
+        streams.in_spans(self.n, span, part)
+        self._norms = (float(parts[0].sum()), float(parts[1].sum()))
 
     def stage_terms(self, power: Callable) -> list[float]:
         """b_i P(t_i, y_i) of the last step, its stage states formed again from K (the rows
@@ -197,6 +224,13 @@ class InPlaceDOP853(DOP853):
         K, h, stage, S = self.K, self.h_previous, self._stage, self.n_stages + 1
         extra = self._extra = np.empty((len(self.C_EXTRA), self.n))
         for i, (a, c) in enumerate(zip(self.A_EXTRA, self.C_EXTRA, strict=True)):
+            if self._jit is not None:  # one pass: y₀ + h Σ a K + h Σ a' (extra stages before)
+                y0 = self.y_old
+                self._spans(
+                    h * _rows(a[:S]), K, h * a[S : S + i], extra, self._one, y0, y0, y0, stage
+                )
+                self._rhs(self.t_old + c * h, stage, extra[i])
+                continue
             np.dot(h * _rows(a[:S]), K, out=stage)
             if i:  # the extra stages before this one (its own row, not yet written, as scratch)
                 np.dot(h * a[S : S + i], extra[:i], out=extra[i])
@@ -264,31 +298,41 @@ class _Dense(DenseOutput):
             c *= x if i % 2 == 0 else 1.0 - x
         return c
 
+    def _coefficients(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At time t: the weights of K's rows, of the extra stages, and of y₀, y and f."""
+        if self.solver.steps != self.step:
+            raise RuntimeError("the dense output of an earlier step (the stages have changed)")
+        c, h = self._weights((t - self.t_old) / self.h), self.h
+        a = c[0] - c[1] + 2.0 * c[2]
+        w = h * (c[3:] @ self.solver.D)
+        w[0] += h * (c[1] - c[2])
+        S = self.solver.n_stages + 1
+        return _rows(w[:S]), w[S:], np.array([1.0 - a, a, -c[2] * h])
+
+    def at(self, t: float, components: np.ndarray) -> np.ndarray:
+        """The interpolant at time t, at the given components only (shape (k,)): a few
+        columns of the stages read, not the whole state (the work integral's nodes where the
+        power reads few coordinates, :meth:`pfaff.integrate.integrators._RKStepper.work_until`)."""
+        s = self.solver
+        w, v, coefs = self._coefficients(float(t))
+        y = w @ s.K[:, components] + v @ s._extra[:, components]  # type: ignore[index]
+        for coef, x in zip(coefs, (self.y_old, self.y, self.f), strict=True):
+            y += coef * x[components]
+        return y
+
     def _call_impl(self, t: np.ndarray) -> np.ndarray:
         s = self.solver
-        if s.steps != self.step:
-            raise RuntimeError("the dense output of an earlier step (the stages have changed)")
         ts = np.atleast_1d(t)
         out = np.empty((len(ts), len(self.y_old)))
         for k, tk in enumerate(ts):
-            c, h = self._weights((float(tk) - self.t_old) / self.h), self.h
-            a = c[0] - c[1] + 2.0 * c[2]
-            w = h * (c[3:] @ s.D)
-            w[0] += h * (c[1] - c[2])
-            S = s.n_stages + 1
+            w, v, coefs = self._coefficients(float(tk))
             if s._jit is not None:
-                coefs = np.array([1.0 - a, a, -c[2] * h])
-                s._jit[0](
-                    _rows(w[:S]), s.K, w[S:], s._extra, coefs, self.y_old, self.y, self.f, out[k]
-                )
+                s._spans(w, s.K, v, s._extra, coefs, self.y_old, self.y, self.f, out[k])
                 continue
-            np.dot(_rows(w[:S]), s.K, out=out[k])
-            np.dot(w[S:], s._extra, out=s._stage)
+            np.dot(w, s.K, out=out[k])
+            np.dot(v, s._extra, out=s._stage)
             out[k] += s._stage
-            np.multiply(self.y_old, 1.0 - a, out=s._stage)
-            out[k] += s._stage
-            np.multiply(self.y, a, out=s._stage)
-            out[k] += s._stage
-            np.multiply(self.f, -c[2] * h, out=s._stage)
-            out[k] += s._stage
+            for coef, x in zip(coefs, (self.y_old, self.y, self.f), strict=True):
+                np.multiply(x, coef, out=s._stage)
+                out[k] += s._stage
         return out[0] if np.ndim(t) == 0 else out.T

@@ -101,6 +101,11 @@ class _RKStepper(Stepper):
 
     def dense(self, ts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         """States inside the last step (before any projection of its end point)."""
+        Y = self._interpolant()(ts)
+        return [(Y[: self.n, i], Y[self.n :, i]) for i in range(len(ts))]
+
+    def _interpolant(self):  # type: ignore[no-untyped-def]
+        """The solver's dense output of the last step (made once per step)."""
         if self._dense is None:
             s = self.solver
             y, s.y = s.y, self._y_raw if self._y_raw is not None else s.y
@@ -108,8 +113,7 @@ class _RKStepper(Stepper):
                 self._dense = s.dense_output()
             finally:
                 s.y = y
-        Y = self._dense(ts)
-        return [(Y[: self.n, i], Y[self.n :, i]) for i in range(len(ts))]
+        return self._dense
 
     def endpoints(self) -> tuple[tuple[float, np.ndarray, np.ndarray], ...]:
         """(t, y, ẏ) at both ends of the last step as computed (before any projection of its
@@ -141,8 +145,28 @@ class _RKStepper(Stepper):
         return h * checked_sum(terms, t0 + h)
 
     def work_until(self, power: Power, b: float) -> float:
-        """∫ P dt from the start of the last step to ``b`` inside it, on the dense output."""
-        return dense_work(self.dense, power, float(self.endpoints()[0][0]), b)
+        """∫ P dt from the start of the last step to ``b`` inside it, on the dense output.
+
+        Where the power names the few coordinates it reads (``coordinates``, at most 1/8 of
+        them: the ring's push reads x alone) and the interpolant can give some components
+        (:meth:`pfaff.integrate.inplace._Dense.at`), the nodes' states are exact there only,
+        the rest the step's start: a few columns of the stages read per node, not 2n values.
+        """
+        (t0, y0, _), n = self.endpoints()[0], self.n
+        dense, idx = self._interpolant(), getattr(power, "coordinates", None)
+        if idx is None or not hasattr(dense, "at") or 8 * len(idx) > n:
+            return dense_work(self.dense, power, float(t0), b)
+        rows = np.concatenate([idx, idx + n])
+
+        def states(ts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+            out = []
+            for t in ts:
+                y = np.array(y0)
+                y[rows] = dense.at(float(t), rows)
+                out.append((y[:n], y[n:]))
+            return out
+
+        return dense_work(states, power, float(t0), b)
 
     def finish(self) -> dict[str, int | float | None]:
         self.stats["nfev"] = self.solver.nfev + self._restarts

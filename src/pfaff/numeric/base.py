@@ -23,7 +23,7 @@ from pfaff.numeric.ggl import GGLNewton
 from pfaff.numeric.kkt import KKTSolver, KKTSystem, SparseSolver
 from pfaff.numeric.parts import ConStreams, DynStreams
 from pfaff.numeric.pattern import KKTPattern, coo
-from pfaff.numeric.projection import ArrayLinearization
+from pfaff.numeric.projection import ArrayLinearization, thresholds
 from pfaff.numeric.protocol import ConstraintLinearization, OdeFunction
 from pfaff.numeric.quantities import Quantities
 from pfaff.numeric.streams import add_product, fill_at, scatter_add, take
@@ -343,11 +343,6 @@ class StreamModel(Quantities, ModelValue):
         solve with zero forcing, O(N) like every solve (:mod:`pfaff.numeric.projection`)."""
         f, g = self.residual(t, q, qd)
         avals, _ = self._accel_constraints(t, q, qd)
-        sq = np.zeros(self.m)
-        for part, vals in zip(self.con, avals, strict=True):
-            for val in vals:
-                scatter_add(sq, part.rows, np.multiply(val, val))
-
         view, solved, _ = self._solved_rows(avals, [0.0] * len(avals))
         mv = view.m  # a left-out row (the closed ring's last) is the last one: its residual
         # follows from the others' where they hold, so the correction is the kept rows'
@@ -361,10 +356,28 @@ class StreamModel(Quantities, ModelValue):
             system = view._system(mvals[0], self._zeros(), solved, r[:mv])
             return self._solver.solve(system, multipliers=False)[0]
 
-        f = np.where(self.holonomic, f, 0.0)
+        if not self.holonomic.all():
+            f = np.where(self.holonomic, f, 0.0)
         return ArrayLinearization(
-            f, g, np.sqrt(sq), tol, correct, correct, lambda v: self.residual(t, q, v)[1]
-        )
+            f, g, None, tol, correct, correct, lambda v: self.residual(t, q, v)[1],
+            thr=self._row_thresholds(avals, tol),
+        )  # fmt: skip
+
+    def _row_thresholds(self, avals: list, tol: float) -> np.ndarray:
+        """The projection's per-row thresholds from the row norms of A (evaluated entries
+        ``avals``), :func:`pfaff.numeric.projection.thresholds`; kept for the run while every
+        entry of A is a constant (the ring's: six passes over m-long arrays less per step)."""
+        kept = self._run_state.get("thresholds")
+        if kept is not None and kept[0] == tol:
+            return kept[1]
+        sq = np.zeros(self.m)
+        for part, vals in zip(self.con, avals, strict=True):
+            for val in vals:
+                scatter_add(sq, part.rows, np.multiply(val, val))
+        thr = thresholds(np.sqrt(sq), tol)
+        if all(c is not None for p in self.con for c in p.acc.const[: len(p.cols)]):
+            self._run_state["thresholds"] = (tol, thr)
+        return thr
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """(M, A, Q − h, f, g) at an unchecked state, M and A assembled as CSR (one pass of

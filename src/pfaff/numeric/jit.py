@@ -38,7 +38,7 @@ def enabled() -> bool:
     return os.environ.get("PFAFF_JIT", "1").strip().lower() not in ("0", "false", "no", "off")
 
 
-def compiled(fn: Callable, *warm: tuple) -> Callable | None:
+def compiled(fn: Callable, *warm: tuple, contract: bool = False) -> Callable | None:
     """``fn`` compiled by numba (once per process), or None (numba missing or failing, or
     ``PFAFF_JIT=0``).
 
@@ -49,6 +49,11 @@ def compiled(fn: Callable, *warm: tuple) -> Callable | None:
     *warm : tuple
         Argument tuples it is called with once now, so that it is compiled (or loaded from the
         cache) here, on the asking thread, for those types, and not inside a later call.
+    contract : bool
+        Let LLVM fuse a multiplication and an addition into one multiply-add where the CPU has
+        one (numba's ``fastmath={"contract"}``, no other fast-math licence): one rounding
+        instead of two, so results differ from the unfused loop's in the last bit, the same
+        from run to run on one machine.
 
     Examples
     --------
@@ -68,17 +73,17 @@ def compiled(fn: Callable, *warm: tuple) -> Callable | None:
     with _LOCK:
         if key not in _DONE:
             with signals_held():  # numba could swallow a Ctrl-C while it loads
-                _DONE[key] = _compile(fn, warm)
+                _DONE[key] = _compile(fn, warm, contract)
     return _DONE[key]
 
 
-def _compile(fn: Callable, warm: tuple) -> Callable | None:
+def _compile(fn: Callable, warm: tuple, contract: bool) -> Callable | None:
     try:
         from pfaff.numeric.numbacode import cached
     except ImportError:
         return None
     try:
-        out = cached(fn, nogil=True)
+        out = cached(fn, nogil=True, **({"fastmath": {"contract"}} if contract else {}))
         for args in warm:
             out(*args)
         return out

@@ -66,25 +66,34 @@ class ArrayLinearization(ConstraintLinearization):
     ----------
     f, g : ndarray, shape (m,)
         Position residuals (already 0 on velocity rows) and A q̇ + b.
-    row_norms : ndarray, shape (m,)
+    row_norms : ndarray, shape (m,), or None
+        |A_i|; None when ``thr`` is given.
     tol : float
     correct_positions, correct_velocities : callable
         ``r -> Δ`` with A Δ = r (the position one takes the whole f, zeros on velocity rows).
     velocity_residual : callable
         ``q̇ -> g`` at the same q.
+    thr : ndarray, shape (m,), optional
+        :func:`thresholds` of the row norms and ``tol``, when the caller has them (a model
+        whose A is constant keeps them for a run); not changed here.
     """
 
     def __init__(
         self,
         f: np.ndarray,
         g: np.ndarray,
-        row_norms: np.ndarray,
+        row_norms: np.ndarray | None,
         tol: float,
         correct_positions: Correction,
         correct_velocities: Correction,
         velocity_residual: Correction,
+        *,
+        thr: np.ndarray | None = None,
     ) -> None:
-        self.f, self.g, self.thr = f, g, thresholds(row_norms, tol)
+        if thr is None:
+            assert row_norms is not None
+            thr = thresholds(row_norms, tol)
+        self.f, self.g, self.thr = f, g, thr
         self._cq, self._cv, self._g = correct_positions, correct_velocities, velocity_residual
         self.position_excess = float(np.max(np.abs(f) / self.thr, initial=0.0))
         self.velocity_excess = float(np.max(np.abs(g) / self.thr, initial=0.0))

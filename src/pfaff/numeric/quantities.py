@@ -14,7 +14,7 @@ import scipy.sparse as sps
 from pfaff.numeric.checks import projection_options, real_vector
 from pfaff.numeric.projection import newton_projection
 from pfaff.numeric.rank import DENSE_LIMIT, null_basis, sparse_null_basis
-from pfaff.numeric.streams import add_product, take
+from pfaff.numeric.streams import add_product, indices, take
 
 
 class Quantities:
@@ -72,13 +72,9 @@ class Quantities:
         return self.power_function()(t, q, qd)
 
     def power_function(self) -> Callable[[float, np.ndarray, np.ndarray], float]:
-        """:meth:`power` without the argument checks, for an integrator's checked states."""
-        parts = [part for part in self.dyn if part.has_power]
-
-        def power(t: float, q: np.ndarray, qd: np.ndarray) -> float:
-            return math.fsum(part.power(t, q, qd) for part in parts)
-
-        return power
+        """:meth:`power` without the argument checks, for an integrator's checked states
+        (:class:`StreamPower`: it names the coordinates it reads)."""
+        return StreamPower([part for part in self.dyn if part.has_power])
 
     def project(
         self, t: float, q: object, qd: object, *, tol: float = 1e-12, max_iter: int = 10
@@ -134,3 +130,32 @@ class Quantities:
         if sps.issparse(A) and A.shape[0] > DENSE_LIMIT:
             return names, sparse_null_basis(sps.csr_matrix(A))
         return names, null_basis(A)
+
+
+class StreamPower:
+    """P(t, q, q̇) = Σ Q_a q̇_a of the blocks with applied forces, unchecked.
+
+    Attributes
+    ----------
+    coordinates : ndarray of int
+        The indices of q (and the same of q̇) it reads: the columns of those blocks (the ring's
+        push: x alone), so that an integrator may give it states exact there only (the dense
+        output at the work integral's nodes, :mod:`pfaff.integrate.work`).
+
+    Examples
+    --------
+    >>> import numpy as np, pfaff
+    >>> ring = pfaff.models.rolling_ring(4, force=True, family=True).equations().compile(
+    ...     {"M": 2, "r": 0.5, "F": 3})
+    >>> power = ring.power_function()
+    >>> power.coordinates.tolist(), power(0.0, np.zeros(5), np.full(5, 2.0))  # F ẋ
+    ([0], 6.0)
+    """
+
+    def __init__(self, parts: list) -> None:
+        self.parts = parts
+        cols = [indices(c) for part in parts for c in part.kernel.columns]
+        self.coordinates = np.unique(np.concatenate(cols)) if cols else np.zeros(0, np.int64)
+
+    def __call__(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        return math.fsum(part.power(t, q, qd) for part in self.parts)

@@ -22,6 +22,7 @@ threshold (see :data:`pfaff.numeric.streams.BLAS_BLOCK`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -133,6 +134,9 @@ class TriangularSolver(KKTSolver):
                 self.T = self._t(self.band, G0)
                 self.C = self._const_mt(self.T)
                 self.TC = self.T @ self.C.T  # Tᵀ M_const T, (p, p)
+        # per row of a constant T: the one value of its family part, or None (the ring's
+        # θ̈_k = ẍ/r: T's family part is 1/r throughout, and the solve reads no N-long T)
+        self.uniform = [_uniform(row[p:]) for row in self.T] if self.T is not None else []
         # the constant parts, once the band and T hold them: N-long arrays no longer kept
         self.R0: np.ndarray | None = None if self.band is not None else R0
         self.G0: np.ndarray | None = None if self.T is not None else G0
@@ -209,7 +213,8 @@ class TriangularSolver(KKTSolver):
         else:
             MT = self._mt(mvals, T)
             Mr = np.array([[MT[g][h] + dot(TL[h], MT[g][p:]) for g in range(p)] for h in range(p)])
-        rr = np.array([r0[h] + (0.0 if fl is None else dot(TL[h], fl)) for h in range(p)])
+        TLs = self._family_rows(T)  # (a uniform row as its number)
+        rr = np.array([r0[h] + (0.0 if fl is None else dot(TLs[h], fl)) for h in range(p)])
         try:
             qG = np.linalg.solve(Mr, rr) if p else np.zeros(0)
         except np.linalg.LinAlgError as e:
@@ -219,7 +224,7 @@ class TriangularSolver(KKTSolver):
             ) from e
         qdd = np.empty(n) if out is None else out
         qdd[:p] = qG
-        _combine(qdd[p:], None if c is None else w, TL, qG)  # q̈_L = w - Z q̈_G
+        _combine(qdd[p:], None if c is None else w, TLs, qG)  # q̈_L = w - Z q̈_G
         if not multipliers:
             return qdd, None
         res = self._v[p:]  # (M q̈ - f)_L = M[0; w]_L - f_L + Σ_g qG_g (MT_g)_L = Σ qG MT - r0
@@ -237,17 +242,33 @@ class TriangularSolver(KKTSolver):
                 if const is None:
                     yield r, c, sym, val
 
+    def _family_rows(self, T: np.ndarray) -> list:
+        """The family parts of T's rows, a row of one value (:attr:`uniform`) as that number."""
+        p = self.plan.p
+        if T is not self.T:
+            return list(T[:, p:])
+        return [T[g, p:] if u is None else u for g, u in enumerate(self.uniform)]
+
+    def _taken(self, ix: Index | np.ndarray, T: np.ndarray, g: int) -> np.ndarray | float:
+        """T[g] at the indices ``ix``: a number where they are all in a uniform family part."""
+        u = self.uniform[g] if T is self.T else None
+        if u is not None and isinstance(ix, Index):
+            if min(ix.start, ix.start + ix.step * (ix.count - 1)) >= self.plan.p:
+                return u
+        return take(ix, T[g])
+
     def _varying_form(self, mvals: list, T: np.ndarray) -> np.ndarray:
         """Tᵀ M_varying T, (p, p), entry by entry without forming M T."""
         p = len(T)
         out = np.zeros((p, p))
         tmp = self.model.scratch()
+        row = self._taken
         for r, c, sym, val in self._varying(mvals):
             for h in range(p):
                 for g in range(h, p):
-                    x = dot3(val, take(r, T[h]), take(c, T[g]), tmp)
+                    x = dot3(val, row(r, T, h), row(c, T, g), tmp)
                     if sym:
-                        x += x if g == h else dot3(val, take(c, T[h]), take(r, T[g]), tmp)
+                        x += x if g == h else dot3(val, row(c, T, h), row(r, T, g), tmp)
                     out[h, g] += x
                     if g != h:
                         out[g, h] += x
@@ -280,15 +301,26 @@ class TriangularSolver(KKTSolver):
         return MT
 
 
+def _uniform(row: np.ndarray) -> float | None:
+    """The one value of a row whose entries are all equal, else None."""
+    return float(row[0]) if row.size and bool(np.all(row == row[0])) else None
+
+
 def _combine(out: np.ndarray, base: np.ndarray | None, vecs, coef) -> None:
-    """out = base + Σ_g coef_g vecs_g, in place."""
-    start = 0
+    """out = base + Σ_g coef_g vecs_g, in place (a vector given as a number: that many times
+    itself; the numbers are added together first, in one pass)."""
+    number = math.fsum(float(c) * v for v, c in zip(vecs, coef, strict=True) if np.ndim(v) == 0)
+    terms = [(v, float(c)) for v, c in zip(vecs, coef, strict=True) if np.ndim(v)]
     if base is not None:
         out[:] = base
-    elif len(coef):
-        scale(vecs[0], float(coef[0]), out)
-        start = 1
+        if number:
+            out += number
+    elif terms:
+        scale(terms[0][0], terms[0][1], out)
+        terms = terms[1:]
+        if number:
+            out += number
     else:
-        out.fill(0.0)
-    for g in range(start, len(coef)):
-        axpy(float(coef[g]), vecs[g], out)
+        out.fill(number)
+    for v, c in terms:
+        axpy(c, v, out)
