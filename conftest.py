@@ -82,6 +82,10 @@ SLOW_DOCTESTS = {
         "the Whipple bicycle derived and linearized: about 2 s; the rolling disk's linearization "
         "(tests/derive/test_linearize.py) takes the same path in the fast suite"
     ),
+    "pfaff.derive.compile_family.compile_structured": (
+        "a family compiled from scratch: 0.6 s; tests/derive/test_families.py compiles families "
+        "in the fast suite"
+    ),
 }
 
 

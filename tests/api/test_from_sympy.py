@@ -197,6 +197,7 @@ def _rolling_disc_kane():
     return km, (m, r)
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_rolling_disc_kane_nonholonomic():
     km, (m, r) = _rolling_disc_kane()
     vals = {m: 1.7, r: 0.4, g: 9.81}

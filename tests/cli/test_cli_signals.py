@@ -170,7 +170,9 @@ def test_subprocess_run_interrupted_mid_simulation_writes_its_points(tmp_path, s
     assert [p.name for p in tmp_path.iterdir()] == ["long.csv"]
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize(
+    "sig", [pytest.param(signal.SIGINT, marks=pytest.mark.slow), signal.SIGTERM]
+)
 def test_a_sweep_interrupted_writes_the_runs_it_has(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path, sig
 ) -> None:

@@ -92,7 +92,7 @@ def test_reduced_equation_symbolic() -> None:
     assert sp.simplify(red.kinetic_energy - M * r**2 * th1.diff(t) ** 2) == 0
 
 
-@pytest.mark.parametrize("n", [3, 8])
+@pytest.mark.parametrize("n", [3, pytest.param(8, marks=pytest.mark.slow)])
 def test_reduced_and_multiplier_forms_agree(n: int) -> None:
     """Same θ̈ from the KKT solve and from the reduced equations, incline and push included."""
     ring = pfaff.models.rolling_ring(n, force=True, incline=True)

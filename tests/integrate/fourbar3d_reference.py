@@ -11,9 +11,15 @@ with I_k the transverse moment of rod k about its centre, m(3r² + L²)/12. Inte
 
 Examples
 --------
+The loop closes: the coupler's end, reached from the crank, is the rocker's end (a = 1,
+b = 3.5, c = 3, d = 4), with B above the line AD.
+
 >>> ref = FourBarReference()
->>> round(float(ref.angles(0.0)[1]), 12) == round(float(ref.angles(0.0)[1]), 12)
-True
+>>> theta = 0.3
+>>> phi, psi = ref.angles(theta)
+>>> B = np.array([np.cos(theta), np.sin(theta)]) + 3.5 * np.array([np.cos(phi), np.sin(phi)])
+>>> bool(np.allclose(B, [4.0 + 3.0 * np.cos(psi), 3.0 * np.sin(psi)], atol=1e-12)), bool(B[1] > 0)
+(True, True)
 """
 
 from __future__ import annotations

@@ -106,7 +106,8 @@ def test_mrp_switches_keep_the_dcm_continuous() -> None:
     assert np.abs(C - ref).max() < 1e-8
 
 
-@pytest.mark.parametrize("kinds", [("mrp",), pytest.param(("quaternion",), marks=pytest.mark.slow)])
+@pytest.mark.parametrize("kinds", [("mrp",), ("quaternion",)])
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_flip_period_matches_the_elliptic_integral(kinds) -> None:
     """The intermediate-axis flip: ω(t) is periodic with period 4K(k)/p (Landau & Lifshitz §37)."""
     w0 = np.array([0.05, 1.0, 0.05])

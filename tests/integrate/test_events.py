@@ -66,7 +66,10 @@ def test_period_projection(which, request):
 
 @pytest.mark.parametrize(
     ("method", "rtol", "atol", "bound"),
-    [("baumgarte", 1e-11, 1e-13, 1e-9), ("ida", 1e-8, 1e-10, 1e-6)],
+    [
+        ("baumgarte", 1e-11, 1e-13, 1e-9),
+        pytest.param("ida", 1e-8, 1e-10, 1e-6, marks=pytest.mark.slow),
+    ],
 )
 @pytest.mark.parametrize("which", ["angle", "cartesian"])
 def test_period_other_methods(which, method, rtol, atol, bound, request):

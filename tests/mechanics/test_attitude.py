@@ -256,6 +256,7 @@ def test_euler_from_dcm_near_gimbal_lock(seq: str, b: float) -> None:
     np.testing.assert_allclose(dcm_from(att, q), c, atol=1e-14)
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_mrp_shadow_set_is_the_same_attitude_and_motion() -> None:
     att, rng = SETS["mrp"], np.random.default_rng(7)
     for _ in range(4):

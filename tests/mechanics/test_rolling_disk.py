@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import pytest
 import sympy as sp
 import sympy.physics.mechanics as me
 
@@ -112,6 +113,7 @@ def _kane_disc():
     return accelerations
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_accelerations_agree_with_kanes_method() -> None:
     kane = _kane_disc()
     model = _model()

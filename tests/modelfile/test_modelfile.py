@@ -67,6 +67,7 @@ def test_run_ring_file_pushed_law(capsys) -> None:
     assert rep["multipliers_final"][0] == pytest.approx(-1.0, abs=1e-9)
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_run_rolling_disk_and_slider_crank(capsys) -> None:
     code, rep = _run_json(capsys, "run", str(EXAMPLES / "rolling_disk.toml"))
     assert code == 0

@@ -93,6 +93,7 @@ def test_mass_matrix_and_bias_against_pinocchio(arm):
     assert worst_h < 1e-10
 
 
+@pytest.mark.slow  # (its two robots over two seconds: the full suite runs it)
 def test_accelerations_against_aba(arm):
     system, model, ref = arm
     n = len(system.urdf_coordinates)

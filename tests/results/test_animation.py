@@ -232,6 +232,7 @@ def test_gif_of_the_ring(ring_model, tmp_path):
     assert frame_count(run.animate(tmp_path / "ring.gif", **SMALL)) == 4
 
 
+@pytest.mark.slow  # (over half a second: the full suite runs it)
 def test_gif_of_a_torque_free_body(body, tmp_path):
     system, model = body
     att = system.bodies[0].attitude
