@@ -206,3 +206,28 @@ def test_stepper_options_are_frozen() -> None:
     with pytest.raises(AttributeError):
         opts.rtol = 1.0  # type: ignore[misc]
     assert opts.step_sizes() == {"max_step": 0.1}
+
+
+def test_hermite_work_at_the_coordinates_the_power_reads() -> None:
+    """A power naming the coordinates it reads (x and θ_3 of 40) gets the same ∫P dt as one
+    that does not say (the whole interpolant at every node), over the step and inside it; on
+    the pushed ring of 64, the family power F·ẋ names x alone."""
+    rng = np.random.default_rng(11)
+    n = 40
+    ends = tuple((t, rng.standard_normal(2 * n), rng.standard_normal(2 * n)) for t in (0.0, 0.1))
+
+    def plain(t, q, v):
+        return float(2.0 * v[0] * np.sin(q[3]) + q[0] * t)
+
+    class Named:
+        coordinates = np.array([0, 3])
+
+        def __call__(self, t, q, v):
+            return plain(t, q, v)
+
+    for a, b in ((0.0, 0.1), (0.02, 0.07)):
+        whole, few = hermite_work(ends, plain, a, b), hermite_work(ends, Named(), a, b)
+        assert few == pytest.approx(whole, rel=1e-14, abs=1e-15)
+    ring = pfaff.models.rolling_ring(64, force=True, family=True).equations()
+    power = ring.compile({"M": 1.0, "r": 0.5, "F": 2.0}).power_function()
+    assert power.coordinates.tolist() == [0]

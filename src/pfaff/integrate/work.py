@@ -33,7 +33,9 @@ def hermite_work(
     a: float,
     b: float,
 ) -> float:
-    """∫ P dt over [a, b] inside the step between ``ends``, three Gauss–Legendre nodes.
+    """∫ P dt over [a, b] inside the step between ``ends``, three Gauss–Legendre nodes; at
+    the coordinates the power reads alone where it names few of them (``coordinates``, at most
+    1/8 of n, as :class:`pfaff.numeric.quantities.StreamPower` does).
 
     Examples
     --------
@@ -47,13 +49,26 @@ def hermite_work(
     (t0, y0, f0), (t1, y1, f1) = ends
     n, h = len(y0) // 2, t1 - t0
     ts = a + (b - a) * (HERMITE_X + 1.0) / 2.0
-    # the six Hermite weights at each node (floats), applied to the end values by one product
+    # the six Hermite weights at each node (floats), applied to the end values by one product;
+    # where the power names the few coordinates it reads (the ring's push: x alone), only there
+    # (the rest of each node's state is the step's start: the power does not read it)
     W = [hermite5_weights((float(ti) - t0) / h, h) for ti in ts]
-    Y = np.empty((6, n))  # (rows: contiguous copies, not a column stack's strided ones)
-    for row, part in zip(Y, (y0[:n], y0[n:], f0[n:], y1[:n], y1[n:], f1[n:]), strict=True):
-        row[:] = part
+    idx = getattr(power, "coordinates", None)
+    few = idx is not None and 8 * len(idx) <= n
+    cols = np.asarray(idx) if few else slice(None)
+    parts = (y0[:n], y0[n:], f0[n:], y1[:n], y1[n:], f1[n:])
+    Y = np.empty((6, len(idx) if few else n))  # (rows: contiguous, not a column stack)
+    for row, part in zip(Y, parts, strict=True):
+        row[:] = part[cols]
     q, qd = np.array([w[0] for w in W]) @ Y, np.array([w[1] for w in W]) @ Y
-    p = [power(float(ti), q[i], qd[i]) for i, ti in enumerate(ts)]
+    p = []
+    for i, ti in enumerate(ts):
+        if few:
+            qi, qdi = y0[:n].copy(), y0[n:].copy()
+            qi[cols], qdi[cols] = q[i], qd[i]
+        else:
+            qi, qdi = q[i], qd[i]
+        p.append(power(float(ti), qi, qdi))
     return 0.5 * (b - a) * checked_sum([w * v for w, v in zip(HERMITE_W, p, strict=True)], b)
 
 
