@@ -16,8 +16,26 @@ others), whose DAE leaves that row out (``model.dae_model``) and takes the same 
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-28 on an idle machine (load average 0.5-0.6), CPU seconds, medians of three,
-two runs (``KEEP_RATIO`` = 6)::
+Measured 2026-11-28 at the end of the day on an idle machine (load average 0.3-0.6), CPU
+seconds, medians of three, two runs (``KEEP_RATIO`` = 8; the pattern and band plan kept by the
+model, λ and μ scaled under one scalar tolerance, single right sides by a vector loop, the
+work integral at the power's coordinates)::
+
+          N    proj s     ida s  ida/proj   ida 1st ida steps  factor.  proj err   ida err
+       1024     0.018     0.054       3.1     0.063        23        4   6.7e-16   2.6e-09
+      16384     0.064     0.373       5.8     0.453        23        4   2.9e-15   2.6e-09
+      65536     0.121     1.226      10.1     1.539        23        4   1.1e-15   2.6e-09
+
+and 3.3, 5.8 and 10.7x in the second run (1.224 s against 0.114 s); the closed ring 7.2x
+(1.479 s). Other runs within the hour: 8.1-9.9x. The code before (8239fcc), alternated the same
+hour: 1.68-1.91 s, 13.0-13.6x its own projection method (0.13-0.14 s), which today's changes to
+the projection method made 15-25 % faster. A run at 2^16 is now about a quarter each IDA's own
+vector work, the preconditioner solves (49, about 6.5 ms each: a band substitution whose rows
+are half interchanged, the λ rows' diagonal being the regularization alone, U's band 8 wide),
+the 4 factorizations (57 ms each: the terms' values 14 ms, their assembly 12, the band LU 14,
+the compact copy 6, the border's two columns 8), and the residuals with the rest.
+
+Earlier that day, before those changes (``KEEP_RATIO`` = 6), idle::
 
           N    proj s     ida s  ida/proj ida steps  factor.  proj err   ida err
        1024     0.023     0.083       3.7        23        5   1.1e-15   2.1e-09
