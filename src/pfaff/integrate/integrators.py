@@ -24,7 +24,7 @@ import numpy as np
 from pfaff.core.errors import OptionError
 from pfaff.integrate.reach import DriftWatch, unreached
 from pfaff.integrate.stepper import Power, Stepper, StepperOptions
-from pfaff.integrate.work import checked_sum, dense_work
+from pfaff.integrate.work import checked_sum, dense_work, read_coordinates, state_at
 from pfaff.numeric.projection import Projector
 from pfaff.numeric.protocol import DynamicsModel, OdeFunction
 
@@ -147,24 +147,21 @@ class _RKStepper(Stepper):
     def work_until(self, power: Power, b: float) -> float:
         """∫ P dt from the start of the last step to ``b`` inside it, on the dense output.
 
-        Where the power names the few coordinates it reads (``coordinates``, at most 1/8 of
-        them: the ring's push reads x alone) and the interpolant can give some components
-        (:meth:`pfaff.integrate.inplace._Dense.at`), the nodes' states are exact there only,
-        the rest the step's start: a few columns of the stages read per node, not 2n values.
+        Where the power names the few coordinates it reads
+        (:func:`pfaff.integrate.work.read_coordinates`: the ring's push reads x alone) and the
+        interpolant can give some components (:meth:`pfaff.integrate.inplace._Dense.at`), the
+        nodes' states are exact there only, the rest the step's start: a few columns of the
+        stages read per node, not 2n values.
         """
         (t0, y0, _), n = self.endpoints()[0], self.n
-        dense, idx = self._interpolant(), getattr(power, "coordinates", None)
-        if idx is None or not hasattr(dense, "at") or 8 * len(idx) > n:
+        dense, idx = self._interpolant(), read_coordinates(power, n)
+        if idx is None or not hasattr(dense, "at"):
             return dense_work(self.dense, power, float(t0), b)
-        rows = np.concatenate([idx, idx + n])
+        rows, k = np.concatenate([idx, idx + n]), len(idx)
 
         def states(ts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-            out = []
-            for t in ts:
-                y = np.array(y0)
-                y[rows] = dense.at(float(t), rows)
-                out.append((y[:n], y[n:]))
-            return out
+            values = [dense.at(float(t), rows) for t in ts]
+            return [state_at(y0, idx, v[:k], v[k:]) for v in values]
 
         return dense_work(states, power, float(t0), b)
 

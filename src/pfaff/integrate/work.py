@@ -24,7 +24,40 @@ HERMITE_X, HERMITE_W = np.polynomial.legendre.leggauss(3)
 # particles the four nodes' states together are 1 GiB, beside K's 2.9 GiB
 ONE_NODE_FROM = 1 << 16
 
+FEW = 8  # a power reading at most 1/FEW of the coordinates gets states exact there only
 Endpoint = tuple[float, np.ndarray, np.ndarray]  # (t, y = [q, q̇], ẏ = [q̇, q̈])
+
+
+def read_coordinates(power: Callable, n: int) -> np.ndarray | None:
+    """The coordinates a power names as the ones it reads (``coordinates``, as
+    :class:`pfaff.numeric.quantities.StreamPower` does), where they are few (at most n / FEW:
+    the ring's push reads x alone); None otherwise. The work integral's nodes then need their
+    states there only (:func:`state_at`).
+
+    Examples
+    --------
+    >>> class Push:
+    ...     coordinates = np.array([0])
+    >>> read_coordinates(Push(), 64).tolist(), read_coordinates(Push(), 4), read_coordinates(abs, 64)
+    ([0], None, None)
+    """
+    idx = getattr(power, "coordinates", None)
+    return None if idx is None or FEW * len(idx) > n else np.asarray(idx)
+
+
+def state_at(y0: np.ndarray, idx: np.ndarray, q: np.ndarray, qd: np.ndarray) -> tuple:
+    """(q, q̇): the state y0 = [q, q̇] with q[idx] and q̇[idx] replaced by ``q`` and ``qd`` (a
+    node's state for a power that reads those coordinates alone; the rest is y0's, unread).
+
+    Examples
+    --------
+    >>> state_at(np.arange(6.0), np.array([1]), np.array([9.0]), np.array([8.0]))
+    (array([0., 9., 2.]), array([3., 8., 5.]))
+    """
+    n = len(y0) // 2
+    qi, qdi = np.array(y0[:n]), np.array(y0[n:])
+    qi[idx], qdi[idx] = q, qd
+    return qi, qdi
 
 
 def hermite_work(
@@ -34,8 +67,7 @@ def hermite_work(
     b: float,
 ) -> float:
     """∫ P dt over [a, b] inside the step between ``ends``, three Gauss–Legendre nodes; at
-    the coordinates the power reads alone where it names few of them (``coordinates``, at most
-    1/8 of n, as :class:`pfaff.numeric.quantities.StreamPower` does).
+    the coordinates the power reads alone where it names few of them (:func:`read_coordinates`).
 
     Examples
     --------
@@ -53,21 +85,16 @@ def hermite_work(
     # where the power names the few coordinates it reads (the ring's push: x alone), only there
     # (the rest of each node's state is the step's start: the power does not read it)
     W = [hermite5_weights((float(ti) - t0) / h, h) for ti in ts]
-    idx = getattr(power, "coordinates", None)
-    few = idx is not None and 8 * len(idx) <= n
-    cols = np.asarray(idx) if few else slice(None)
+    idx = read_coordinates(power, n)
+    cols = slice(None) if idx is None else idx
     parts = (y0[:n], y0[n:], f0[n:], y1[:n], y1[n:], f1[n:])
-    Y = np.empty((6, len(idx) if few else n))  # (rows: contiguous, not a column stack)
+    Y = np.empty((6, n if idx is None else len(idx)))  # (rows: contiguous, not a column stack)
     for row, part in zip(Y, parts, strict=True):
         row[:] = part[cols]
     q, qd = np.array([w[0] for w in W]) @ Y, np.array([w[1] for w in W]) @ Y
     p = []
     for i, ti in enumerate(ts):
-        if few:
-            qi, qdi = y0[:n].copy(), y0[n:].copy()
-            qi[cols], qdi[cols] = q[i], qd[i]
-        else:
-            qi, qdi = q[i], qd[i]
+        qi, qdi = (q[i], qd[i]) if idx is None else state_at(y0, idx, q[i], qd[i])
         p.append(power(float(ti), qi, qdi))
     return 0.5 * (b - a) * checked_sum([w * v for w, v in zip(HERMITE_W, p, strict=True)], b)
 
