@@ -365,19 +365,23 @@ class StreamModel(Quantities, ModelValue):
 
     def _row_thresholds(self, avals: list, tol: float) -> np.ndarray:
         """The projection's per-row thresholds from the row norms of A (evaluated entries
-        ``avals``), :func:`pfaff.numeric.projection.thresholds`; kept for the run while every
-        entry of A is a constant (the ring's: six passes over m-long arrays less per step)."""
-        kept = self._run_state.get("thresholds")
-        if kept is not None and kept[0] == tol:
-            return kept[1]
-        sq = np.zeros(self.m)
-        for part, vals in zip(self.con, avals, strict=True):
-            for val in vals:
-                scatter_add(sq, part.rows, np.multiply(val, val))
-        thr = thresholds(np.sqrt(sq), tol)
-        if all(c is not None for p in self.con for c in p.acc.const[: len(p.cols)]):
-            self._run_state["thresholds"] = (tol, thr)
-        return thr
+        ``avals``), :func:`pfaff.numeric.projection.thresholds`; kept by the model
+        (:meth:`derived`) where every entry of A is a constant (the ring's: six passes over
+        m-long arrays less per step)."""
+
+        def made() -> np.ndarray:
+            sq = np.zeros(self.m)
+            for part, vals in zip(self.con, avals, strict=True):
+                for val in vals:
+                    scatter_add(sq, part.rows, np.multiply(val, val))
+            thr = thresholds(np.sqrt(sq), tol)
+            thr.flags.writeable = False  # (shared by the runs where A is constant)
+            return thr
+
+        constant = self.derived(("constant A", self.m), lambda: all(
+            c is not None for p in self.con for c in p.acc.const[: len(p.cols)]
+        ))  # fmt: skip
+        return self.derived(("row thresholds", self.m, tol), made) if constant else made()
 
     def dae_blocks(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         """(M, A, Q − h, f, g) at an unchecked state, M and A assembled as CSR (one pass of
