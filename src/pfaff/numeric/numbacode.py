@@ -42,23 +42,23 @@ def cached(fn, **options):
 
 
 @functools.cache
-def source_digest(module: str = "pfaff") -> str:
+def source_digest(module: str) -> str:
     """SHA-256 of the sources ``module`` is made from: its file and, through every ``pfaff``
     import in them (at the top or inside a function, :func:`_imported`), the files
     of the pfaff modules it imports, transitively (a package's ``__init__`` counted, its
-    re-exports not followed). ``"pfaff"``: every source file. Once per module and process.
+    re-exports not followed). Once per module and process.
 
     Examples
     --------
-    >>> source_digest("pfaff.numeric.bandlu") == source_digest("pfaff.numeric.bandlu")
-    True
+    >>> band, jit = source_digest("pfaff.numeric.bandlu"), source_digest("pfaff.numeric.jit")
+    >>> len(band), band != jit  # (a hex SHA-256; other sources, another digest)
+    (64, True)
     >>> sorted(p.name for p in _sources("pfaff.numeric.bandlu"))
     ['bandlu.py', 'numbacode.py']
     """
     root = Path(__file__).resolve().parents[1]
-    paths = sorted(root.rglob("*.py")) if module == "pfaff" else sorted(_sources(module))
     h = hashlib.sha256()
-    for path in paths:
+    for path in sorted(_sources(module)):
         h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
     return h.hexdigest()
 
