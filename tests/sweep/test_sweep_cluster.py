@@ -7,7 +7,6 @@ import logging
 import os
 import signal
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -67,33 +66,54 @@ def test_existing_cluster_by_address_and_client(cluster, cartesian):
     same_runs(ds, ref)
 
 
-def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum):
+def test_a_killed_worker_does_not_lose_the_sweep(cluster, pendulum, tmp_path):
+    """A worker killed (SIGKILL) inside a run of a batch: its nanny starts another, the batch
+    runs again, and the sweep is the one this process makes, bit for bit.
+
+    The kill is made by the run itself, the first time the last grid point starts on any
+    worker (a marker file made exclusively: once), not by a thread of the test watching the
+    scheduler, which could see the sweep end before it saw two batches running."""
     from distributed import Client
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    marker = str(tmp_path / "killed")
+
+    class KillOnce(WorkerPlugin):
+        name = "kill-once"
+
+        def setup(self, worker):
+            from pfaff.sweep import worker as w  # (pfaff.sweep is the function)
+
+            self.real = real = w._run
+
+            def _run(entry, spec, i):
+                point = spec.grid.point(i)
+                if point["L"] == 2.0 and point["q0.theta"] == 1.5:
+                    try:
+                        os.close(os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+                    except FileExistsError:
+                        pass
+                    else:
+                        os.kill(os.getpid(), signal.SIGKILL)
+                return real(entry, spec, i)
+
+            w._run = _run
+
+        def teardown(self, worker):
+            from pfaff.sweep import worker as w
+
+            w._run = self.real
 
     vary = {"L": np.linspace(0.5, 2.0, 6), "q0.theta": np.linspace(0.1, 1.5, 4)}
-    t_end = 200.0  # runs of about 0.2 s: batches of a few runs, a sweep of seconds
-    ref = pfaff.sweep(pendulum, vary, t_end=t_end, scheduler="synchronous")
+    ref = pfaff.sweep(pendulum, vary, t_end=20.0, scheduler="synchronous")
     with Client(cluster) as client:
         before = client.run(os.getpid)
-        killed: dict[str, float] = {}
-
-        def kill_one_when_busy() -> None:
-            start = time.monotonic()
-            while time.monotonic() - start < 60:
-                processing = client.processing()
-                if sum(map(len, processing.values())) >= 2:  # past the probe: batches running
-                    busy = [a for a, tasks in processing.items() if tasks and a in before]
-                    os.kill(before[busy[0]], signal.SIGKILL)
-                    killed["at"] = time.monotonic()
-                    return
-                time.sleep(0.01)
-
-        killer = threading.Thread(target=kill_one_when_busy)
-        killer.start()
-        ds = pfaff.sweep(pendulum, vary, t_end=t_end, scheduler=client, progress=False)
-        done = time.monotonic()
-        killer.join()
-        assert "at" in killed and killed["at"] < done  # killed mid-sweep
+        client.register_plugin(KillOnce())
+        try:
+            ds = pfaff.sweep(pendulum, vary, t_end=20.0, scheduler=client, progress=False)
+        finally:
+            client.unregister_worker_plugin(KillOnce.name)
+        assert os.path.exists(marker)  # a worker was killed inside a run of the sweep
         client.wait_for_workers(2, timeout=60)
         after = client.run(os.getpid)
     assert set(before.values()) != set(after.values())  # the nanny started a new worker
