@@ -117,3 +117,46 @@ def test_the_border_scatter_against_numpy(live) -> None:
     expected[order] = y - Xt.T @ zs
     expected[border] = zs
     np.testing.assert_allclose(z, expected, rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize(("kl", "ku"), [(4, 4), (2, 1), (1, 3)])
+def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
+    """The narrow solve (fixed widths, U by rows, the gather inside) does band_solve's
+    operations in band_solve's order, with row interchanges: the same result bit for bit, from
+    a right side in another order (gathered) or in band order (an empty order); and it solves
+    the matrix it factored."""
+    kernels = bordered._kernels()
+    if kernels is None:
+        pytest.skip("numba is not installed")
+    rng = np.random.default_rng(kl * 10 + ku)
+    n = 200
+    dense = np.zeros((n, n))
+    for d in range(-kl, ku + 1):
+        dense += np.diag(rng.standard_normal(n - abs(d)), d)
+    dense += np.eye(n) * (kl + ku + 2)
+    dense *= np.exp(rng.uniform(-7.0, 7.0, (n, 1)))  # rows scaled apart: the pivots move
+    ab = np.zeros((n, 2 * kl + ku + 1))
+    for i, j in zip(*np.nonzero(dense), strict=True):
+        ab[j, kl + ku + i - j] = dense[i, j]
+    piv = np.empty(n, dtype=np.int64)
+    assert kernels.band_factor(ab, kl, ku, piv) == 0
+    assert (piv != np.arange(n)).sum() > n // 10
+    ue = min(kl + ku, ku + int((piv - np.arange(n)).max()))
+    assert kl <= kernels.NARROW_L and ue <= kernels.NARROW_U
+    lower, upper = np.empty((n, kl)), np.empty((n, ue + 1))
+    kernels.band_split(ab, kl, ku, lower, upper)
+    narrow = (
+        np.empty((n, kernels.NARROW_L)), np.empty(n, dtype=np.int8),
+        np.empty((n, kernels.NARROW_U + 1)),
+    )  # fmt: skip
+    kernels.narrow_split(ab, kl, ku, piv, *narrow)
+    order = rng.permutation(n).astype(np.int64)
+    r = rng.standard_normal(n)
+    expected = r[order][None, :].copy()
+    kernels.band_solve(lower, upper, piv, expected)
+    x = np.full(n + kernels.NARROW_U, np.nan)  # (its tail is the solve's to clear)
+    kernels.narrow_solve(*narrow, r, order, x)
+    np.testing.assert_array_equal(x[:n], expected[0])
+    kernels.narrow_solve(*narrow, r[order], order[:0], x)
+    np.testing.assert_array_equal(x[:n], expected[0])
+    np.testing.assert_allclose(x[:n], np.linalg.solve(dense, r[order]), rtol=1e-10, atol=1e-12)

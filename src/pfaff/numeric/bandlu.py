@@ -149,6 +149,111 @@ def band_solve(
                 b[c, j - i] -= upper[j, i] * bj
 
 
+NARROW_L, NARROW_K = 4, 4  # the narrow factorization's fixed kl and ku
+NARROW_U = NARROW_L + NARROW_K  # U's width at most, with the row interchanges
+
+
+@cached
+def narrow_factor(ab: np.ndarray, piv: np.ndarray) -> int:  # pragma: no cover
+    """:func:`band_factor` with kl = ``NARROW_L`` and ku = ``NARROW_K`` fixed (a narrower band
+    stored as this one, its extra places zero): the same operations on the same values (the
+    zeros past the matrix's last row are never a pivot, and multiply as zeros), so the same
+    factors to the last bit, in about 60 % of the time (the ring's GGL matrix at 2^16 members:
+    14 ms against 24)."""
+    n = ab.shape[0]
+    kv = NARROW_L + NARROW_K
+    ju = 0
+    for j in range(n):
+        jp, big = 0, abs(ab[j, kv])
+        for p in range(1, NARROW_L + 1):
+            a = abs(ab[j, kv + p])
+            if a > big:
+                jp, big = p, a
+        piv[j] = j + jp
+        if not 1.0 / big < np.inf:
+            return j + 1
+        ju = max(ju, min(j + NARROW_K + jp, n - 1))
+        if jp != 0:
+            for c in range(j, ju + 1):
+                a, b = kv + j - c, kv + j + jp - c
+                ab[c, a], ab[c, b] = ab[c, b], ab[c, a]
+        r = 1.0 / ab[j, kv]
+        for p in range(1, NARROW_L + 1):
+            ab[j, kv + p] *= r
+        for c in range(j + 1, ju + 1):
+            u = ab[c, kv + j - c]
+            if u != 0.0:
+                for p in range(1, NARROW_L + 1):
+                    ab[c, kv + j + p - c] -= ab[j, kv + p] * u
+    return 0
+
+
+@cached
+def narrow_split(
+    ab: np.ndarray,
+    kl: int,
+    ku: int,
+    piv: np.ndarray,
+    lower: np.ndarray,
+    off: np.ndarray,
+    upper: np.ndarray,
+) -> None:  # pragma: no cover
+    """The factors of :func:`band_factor` for :func:`narrow_solve`, where kl ≤ ``NARROW_L`` and
+    U's width ≤ ``NARROW_U``: ``lower[j, i]`` the multiplier of row j + i + 1 by row j (shape
+    (n, NARROW_L), zero past kl and past the matrix), ``off[j]`` = piv[j] − j, ``upper[j, 0]``
+    = 1 / U[j, j] and ``upper[j, i]`` = U[j, j + i] (shape (n, NARROW_U + 1), U by rows, zero
+    past its width and past the matrix)."""
+    n = ab.shape[0]
+    kv = kl + ku
+    for j in range(n):
+        off[j] = piv[j] - j
+        for i in range(NARROW_L):
+            lower[j, i] = ab[j, kv + 1 + i] if i < kl and j + 1 + i < n else 0.0
+        upper[j, 0] = 1.0 / ab[j, kv]
+        for i in range(1, NARROW_U + 1):
+            upper[j, i] = ab[j + i, kv - i] if i <= kv and j + i < n else 0.0
+
+
+@cached
+def narrow_solve(
+    lower: np.ndarray,
+    off: np.ndarray,
+    upper: np.ndarray,
+    r: np.ndarray,
+    order: np.ndarray,
+    x: np.ndarray,
+) -> None:  # pragma: no cover
+    """x[:n] = A⁻¹ r[order] (r itself where ``order`` is empty) with the factors of
+    :func:`narrow_split`; x of shape (n + NARROW_U,), its tail a scratch of zeros.
+
+    The same operations in the same order as :func:`band_solve`'s on one right side, so the
+    same result to the last bit, and about twice as fast: every row's loops have the fixed
+    widths (unrolled, the few zeros past a row's own width multiplied in), the interchange is
+    unconditional, the gather of r is made row by row inside the pass over L, and U is read by
+    rows: each unknown is a sum of products in which the unknown just found comes last, so
+    that rows overlap instead of waiting on one another's stores."""
+    n = off.size
+    for i in range(NARROW_U):
+        x[n + i] = 0.0
+    identity = order.size == 0
+    for i in range(min(NARROW_L, n)):
+        x[i] = r[i] if identity else r[order[i]]
+    for j in range(n):  # L, with the interchanges (row j + NARROW_L is first met here)
+        if j + NARROW_L < n:
+            x[j + NARROW_L] = r[j + NARROW_L] if identity else r[order[j + NARROW_L]]
+        o = j + off[j]
+        xj = x[o]
+        x[o] = x[j]
+        x[j] = xj
+        for i in range(NARROW_L):
+            x[j + 1 + i] -= lower[j, i] * xj
+    for j in range(n - 1, -1, -1):  # U, the farthest column first (band_solve's order)
+        s = x[j]
+        for i in range(NARROW_U, 0, -1):
+            s -= upper[j, i] * x[j + i]
+        x[j] = s * upper[j, 0]
+
+
 @cached
 def sum_into(out: np.ndarray, slots: np.ndarray, values: np.ndarray) -> None:  # pragma: no cover
     """out[slots[i]] += values[i] for every i (``np.bincount`` into an array kept between

@@ -91,7 +91,8 @@ class BorderedBand:
         self._band: tuple = (None, None, None)
         self._schur: tuple | None = None
         self._buffer: np.ndarray | None = None
-        self._factors: tuple = (None, None)  # the compiled path's compact L and U
+        self._factors: tuple = ()  # the compiled path's compact L and U (bandlu)
+        self._x = np.empty(0)  # the narrow solve's buffer
 
     @classmethod
     def plan(
@@ -127,6 +128,9 @@ class BorderedBand:
         ku = int(max(0, (pc - pr).max(initial=0)))
         if kl + ku > max_band:
             return None
+        narrow = _kernels() if nb >= COMPILED_FROM else None
+        if narrow is not None and kl <= narrow.NARROW_L and ku <= narrow.NARROW_K:
+            kl, ku = narrow.NARROW_L, narrow.NARROW_K  # stored as the narrow band's fixed widths
         plan = cls(size, border, keep[perm], kl, ku)
         plan.positions = plan._positions(rows, cols, inner, local, rank)
         for a in (plan.border, plan.order, plan.positions):
@@ -196,14 +200,18 @@ class BorderedBand:
 
     def solve(self, r: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """z = J⁻¹ r with the last factors, shape (size,), into ``out`` if given."""
-        kernels = self._band[0]
+        kernels, factors, _ = self._band
         z = np.empty(self.size) if out is None else out
         if kernels is None:
             y = r[self.order]
+            self._band_solve(y.reshape(1, self.nb))
+        elif len(factors) == 3:  # the narrow solve gathers r itself, into its own buffer
+            kernels.narrow_solve(*factors, r, self.order, self._x)
+            y = self._x[: self.nb]
         else:
             y = np.empty(self.nb)
             kernels.gather(y, r, self.order)
-        self._band_solve(y.reshape(1, self.nb))
+            self._band_solve(y.reshape(1, self.nb))
         if self._schur is None:
             z[self.order] = y
             return z
@@ -224,22 +232,37 @@ class BorderedBand:
         if kernels is not None:
             ab = band.reshape(self.nb, self.ldab)
             piv = np.empty(self.nb, dtype=np.int64)
-            info = kernels.band_factor(ab, self.kl, self.ku, piv)
+            if (self.kl, self.ku) == (kernels.NARROW_L, kernels.NARROW_K):
+                info = kernels.narrow_factor(ab, piv)
+            else:
+                info = kernels.band_factor(ab, self.kl, self.ku, piv)
             if info == 0:
                 ue = self.ku + int((piv - np.arange(self.nb)).max(initial=0))
-                ab = self._split(kernels, ab, min(ue, self.kl + self.ku))
+                ab = self._split(kernels, ab, piv, min(ue, self.kl + self.ku))
         else:
             ab = band.reshape(self.nb, self.ldab).T  # Fortran order, a view
             ab, piv, info = lapack.dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
         self._band = (kernels, ab, piv)
         return info == 0
 
-    def _split(self, kernels: ModuleType, ab: np.ndarray, ue: int) -> tuple:
-        """(lower, upper): the factors in ab compacted (:func:`pfaff.numeric.bandlu.band_split`),
-        into arrays kept between factorizations."""
-        lower, upper = self._factors
+    def _split(self, kernels: ModuleType, ab: np.ndarray, piv: np.ndarray, ue: int) -> tuple:
+        """The factors in ab compacted, into arrays kept between factorizations: (lower, off,
+        upper) of :func:`pfaff.numeric.bandlu.narrow_split` where L and U are narrow enough
+        for its fixed widths (the ring's: kl = 4, U 5 to 8 wide), else (lower, upper) of
+        :func:`pfaff.numeric.bandlu.band_split`."""
+        nb = self.nb
+        if self.kl <= kernels.NARROW_L and ue <= kernels.NARROW_U:
+            if len(self._factors) != 3:
+                self._factors = (
+                    np.empty((nb, kernels.NARROW_L)), np.empty(nb, dtype=np.int8),
+                    np.empty((nb, kernels.NARROW_U + 1)),
+                )  # fmt: skip
+                self._x = np.empty(nb + kernels.NARROW_U)
+            kernels.narrow_split(ab, self.kl, self.ku, piv, *self._factors)
+            return self._factors
+        lower, upper = self._factors if len(self._factors) == 2 else (None, None)
         if lower is None or upper.shape[1] != ue + 1:
-            lower, upper = np.empty((self.nb, self.kl)), np.empty((self.nb, ue + 1))
+            lower, upper = np.empty((nb, self.kl)), np.empty((nb, ue + 1))
             self._factors = (lower, upper)
         kernels.band_split(ab, self.kl, self.ku, lower, upper)
         return lower, upper
@@ -248,7 +271,11 @@ class BorderedBand:
         """b ← B⁻¹ b in place, b of shape (columns, nb) (a right side per row), C-contiguous;
         returns b."""
         kernels, ab, piv = self._band
-        if kernels is not None:
+        if kernels is not None and len(ab) == 3:
+            for row in b:  # (the identity order: an empty one)
+                kernels.narrow_solve(*ab, row, piv[:0], self._x)
+                row[:] = self._x[: self.nb]
+        elif kernels is not None:
             kernels.band_solve(*ab, piv, b)
         else:
             b[:] = lapack.dgbtrs(ab, self.kl, self.ku, b.T, piv)[0].T
@@ -273,6 +300,12 @@ def _load_bandlu() -> ModuleType:
     bandlu.band_factor(ab, 0, 0, piv)
     bandlu.band_split(ab, 0, 0, ab[:, :0], ab)
     bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
+    lower, off = np.zeros((1, bandlu.NARROW_L)), np.zeros(1, dtype=np.int8)
+    upper, x = np.ones((1, bandlu.NARROW_U + 1)), np.zeros(1 + bandlu.NARROW_U)
+    bandlu.narrow_split(ab, 0, 0, piv, lower, off, upper)
+    bandlu.narrow_factor(np.ones((1, 2 * bandlu.NARROW_L + bandlu.NARROW_K + 1)), piv)
+    bandlu.narrow_solve(lower, off, upper, fixed, index, x)  # (a right side of IDA's)
+    bandlu.narrow_solve(lower, off, upper, one, piv[:0], x)  # (a column of the border's)
     bandlu.sum_into(one, index, one)
     bandlu.gather(one, fixed, index)
     bandlu.scatter_border(one, one, ab, one, index, index, piv)
