@@ -121,8 +121,9 @@ def test_the_border_scatter_against_numpy(live) -> None:
 
 @pytest.mark.parametrize(("kl", "ku"), [(4, 4), (2, 1), (1, 3)])
 def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
-    """The narrow solve (fixed widths, U by rows, the gather inside) does band_solve's
-    operations in band_solve's order, with row interchanges: the same result bit for bit, from
+    """The narrow factorization and solve (fixed widths, U by rows, the gather inside) do
+    band_factor's and band_solve's operations in their order, with row interchanges: the same
+    pivots and the same result bit for bit, from
     a right side in another order (gathered) or in band order (an empty order); and it solves
     the matrix it factored."""
     kernels = bordered._kernels()
@@ -149,7 +150,14 @@ def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
         np.empty((n, kernels.NARROW_L)), np.empty(n, dtype=np.int8),
         np.empty((n, kernels.NARROW_U + 1)),
     )  # fmt: skip
-    kernels.narrow_split(ab, kl, ku, piv, *narrow)
+    # the narrow factorization: the same matrix stored at the fixed widths, the same factors
+    L4, K4 = kernels.NARROW_L, kernels.NARROW_K
+    ab4, piv4 = np.zeros((n, 2 * L4 + K4 + 1)), np.empty(n, dtype=np.int64)
+    for i, j in zip(*np.nonzero(dense), strict=True):
+        ab4[j, L4 + K4 + i - j] = dense[i, j]
+    assert kernels.narrow_factor(ab4, piv4) == 0
+    np.testing.assert_array_equal(piv4, piv)
+    kernels.narrow_split(ab4, L4, K4, piv4, *narrow)
     order = rng.permutation(n).astype(np.int64)
     r = rng.standard_normal(n)
     expected = r[order][None, :].copy()
