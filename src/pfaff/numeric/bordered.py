@@ -207,7 +207,7 @@ class BorderedBand:
             self._band_solve(y.reshape(1, self.nb))
         elif len(factors) == 3:  # the narrow solve gathers r itself, into its own buffer
             kernels.narrow_solve(*factors, r, self.order, self._x)
-            y = self._x[: self.nb]
+            y = self._x
         else:
             y = np.empty(self.nb)
             kernels.gather(y, r, self.order)
@@ -257,7 +257,7 @@ class BorderedBand:
                     np.empty((nb, kernels.NARROW_L)), np.empty(nb, dtype=np.int8),
                     np.empty((nb, kernels.NARROW_U + 1)),
                 )  # fmt: skip
-                self._x = np.empty(nb + kernels.NARROW_U)
+                self._x = np.empty(nb)
             kernels.narrow_split(ab, self.kl, self.ku, piv, *self._factors)
             return self._factors
         lower, upper = self._factors if len(self._factors) == 2 else (None, None)
@@ -272,9 +272,9 @@ class BorderedBand:
         returns b."""
         kernels, ab, piv = self._band
         if kernels is not None and len(ab) == 3:
-            for row in b:  # (the identity order: an empty one)
-                kernels.narrow_solve(*ab, row, piv[:0], self._x)
-                row[:] = self._x[: self.nb]
+            identity = np.arange(self.nb)
+            for row in b:  # in place
+                kernels.narrow_solve(*ab, row, identity, row)
         elif kernels is not None:
             kernels.band_solve(*ab, piv, b)
         else:
@@ -301,11 +301,11 @@ def _load_bandlu() -> ModuleType:
     bandlu.band_split(ab, 0, 0, ab[:, :0], ab)
     bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
     lower, off = np.zeros((1, bandlu.NARROW_L)), np.zeros(1, dtype=np.int8)
-    upper, x = np.ones((1, bandlu.NARROW_U + 1)), np.zeros(1 + bandlu.NARROW_U)
+    upper, x = np.ones((1, bandlu.NARROW_U + 1)), np.zeros(1)
     bandlu.narrow_split(ab, 0, 0, piv, lower, off, upper)
     bandlu.narrow_factor(np.ones((1, 2 * bandlu.NARROW_L + bandlu.NARROW_K + 1)), piv)
     bandlu.narrow_solve(lower, off, upper, fixed, index, x)  # (a right side of IDA's)
-    bandlu.narrow_solve(lower, off, upper, one, piv[:0], x)  # (a column of the border's)
+    bandlu.narrow_solve(lower, off, upper, one, piv, one)  # (a column of the border's)
     bandlu.sum_into(one, index, one)
     bandlu.gather(one, fixed, index)
     bandlu.scatter_border(one, one, ab, one, index, index, piv)
