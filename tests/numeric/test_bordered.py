@@ -119,6 +119,15 @@ def test_the_border_scatter_against_numpy(live) -> None:
     np.testing.assert_allclose(z, expected, rtol=1e-14, atol=1e-14)
 
 
+def upper_rows(upper: np.ndarray) -> np.ndarray:
+    """band_split's U by columns (upper[j, i] = U[j − i, j]) as the narrow one's, by rows."""
+    rows = np.zeros_like(upper)
+    rows[:, 0] = upper[:, 0]
+    for i in range(1, upper.shape[1]):
+        rows[:-i, i] = upper[i:, i]
+    return rows
+
+
 @pytest.mark.parametrize(("kl", "ku"), [(4, 4), (2, 1), (1, 3)])
 def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
     """The narrow factorization and solve (fixed widths, U by rows, the gather inside) do
@@ -152,12 +161,14 @@ def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
     )  # fmt: skip
     # the narrow factorization: the same matrix stored at the fixed widths, the same factors
     L4, K4 = kernels.NARROW_L, kernels.NARROW_K
-    ab4, piv4 = np.zeros((n, 2 * L4 + K4 + 1)), np.empty(n, dtype=np.int64)
+    ab4 = np.zeros((n, 2 * L4 + K4 + 1))
     for i, j in zip(*np.nonzero(dense), strict=True):
         ab4[j, L4 + K4 + i - j] = dense[i, j]
-    assert kernels.narrow_factor(ab4, piv4) == 0
-    np.testing.assert_array_equal(piv4, piv)
-    kernels.narrow_split(ab4, L4, K4, piv4, *narrow)
+    assert kernels.narrow_factor(ab4, *narrow) == 0
+    np.testing.assert_array_equal(narrow[1], piv - np.arange(n))
+    np.testing.assert_array_equal(narrow[0][:, :kl], lower)
+    np.testing.assert_array_equal(narrow[2][:, : ue + 1], upper_rows(upper))
+    assert not narrow[0][:, kl:].any() and not narrow[2][:, ue + 1 :].any()
     order = rng.permutation(n).astype(np.int64)
     r = rng.standard_normal(n)
     expected = r[order][None, :].copy()

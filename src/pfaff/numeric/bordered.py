@@ -227,42 +227,38 @@ class BorderedBand:
     # ------------------------------------------------------------------ the band's LU
     def _band_factor(self, band: np.ndarray) -> bool:
         """B's LU from its band storage (overwritten): numba's loops for a long band
-        (:mod:`pfaff.numeric.bandlu`), LAPACK's ``dgbtrf`` otherwise."""
+        (:mod:`pfaff.numeric.bandlu`; at the narrow widths their fixed-width factorization,
+        which also writes the factors its solve reads), LAPACK's ``dgbtrf`` otherwise."""
         kernels = _kernels() if self.nb >= COMPILED_FROM else None
-        if kernels is not None:
-            ab = band.reshape(self.nb, self.ldab)
-            piv = np.empty(self.nb, dtype=np.int64)
-            if (self.kl, self.ku) == (kernels.NARROW_L, kernels.NARROW_K):
-                info = kernels.narrow_factor(ab, piv)
-            else:
-                info = kernels.band_factor(ab, self.kl, self.ku, piv)
-            if info == 0:
-                ue = self.ku + int((piv - np.arange(self.nb)).max(initial=0))
-                ab = self._split(kernels, ab, piv, min(ue, self.kl + self.ku))
-        else:
-            ab = band.reshape(self.nb, self.ldab).T  # Fortran order, a view
-            ab, piv, info = lapack.dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
-        self._band = (kernels, ab, piv)
-        return info == 0
-
-    def _split(self, kernels: ModuleType, ab: np.ndarray, piv: np.ndarray, ue: int) -> tuple:
-        """The factors in ab compacted, into arrays kept between factorizations: (lower, off,
-        upper) of :func:`pfaff.numeric.bandlu.narrow_split` where L and U are narrow enough
-        for its fixed widths (the ring's: kl = 4, U 5 to 8 wide), else (lower, upper) of
-        :func:`pfaff.numeric.bandlu.band_split`."""
         nb = self.nb
-        if self.kl <= kernels.NARROW_L and ue <= kernels.NARROW_U:
-            if len(self._factors) != 3:
+        if kernels is None:
+            ab = band.reshape(nb, self.ldab).T  # Fortran order, a view
+            ab, piv, info = lapack.dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
+        elif (self.kl, self.ku) == (kernels.NARROW_L, kernels.NARROW_K):
+            if not self._factors:  # (kept between factorizations)
                 self._factors = (
                     np.empty((nb, kernels.NARROW_L)), np.empty(nb, dtype=np.int8),
                     np.empty((nb, kernels.NARROW_U + 1)),
                 )  # fmt: skip
                 self._x = np.empty(nb)
-            kernels.narrow_split(ab, self.kl, self.ku, piv, *self._factors)
-            return self._factors
-        lower, upper = self._factors if len(self._factors) == 2 else (None, None)
+            ab, piv = self._factors, None
+            info = kernels.narrow_factor(band.reshape(nb, self.ldab), *ab)
+        else:
+            ab = band.reshape(nb, self.ldab)
+            piv = np.empty(nb, dtype=np.int64)
+            info = kernels.band_factor(ab, self.kl, self.ku, piv)
+            if info == 0:
+                ue = self.ku + int((piv - np.arange(nb)).max(initial=0))
+                ab = self._split(kernels, ab, min(ue, self.kl + self.ku))
+        self._band = (kernels, ab, piv)
+        return info == 0
+
+    def _split(self, kernels: ModuleType, ab: np.ndarray, ue: int) -> tuple:
+        """(lower, upper): the factors in ab compacted (:func:`pfaff.numeric.bandlu.band_split`),
+        into arrays kept between factorizations."""
+        lower, upper = self._factors or (None, None)
         if lower is None or upper.shape[1] != ue + 1:
-            lower, upper = np.empty((nb, self.kl)), np.empty((nb, ue + 1))
+            lower, upper = np.empty((self.nb, self.kl)), np.empty((self.nb, ue + 1))
             self._factors = (lower, upper)
         kernels.band_split(ab, self.kl, self.ku, lower, upper)
         return lower, upper
@@ -302,8 +298,8 @@ def _load_bandlu() -> ModuleType:
     bandlu.band_solve(ab[:, :0].copy(), ab, piv, np.ones((1, 1)))
     lower, off = np.zeros((1, bandlu.NARROW_L)), np.zeros(1, dtype=np.int8)
     upper, x = np.ones((1, bandlu.NARROW_U + 1)), np.zeros(1)
-    bandlu.narrow_split(ab, 0, 0, piv, lower, off, upper)
-    bandlu.narrow_factor(np.ones((1, 2 * bandlu.NARROW_L + bandlu.NARROW_K + 1)), piv)
+    narrow = np.ones((1, 2 * bandlu.NARROW_L + bandlu.NARROW_K + 1))
+    bandlu.narrow_factor(narrow, lower, off, upper)
     bandlu.narrow_solve(lower, off, upper, fixed, index, x)  # (a right side of IDA's)
     bandlu.narrow_solve(lower, off, upper, one, piv, one)  # (a column of the border's)
     bandlu.sum_into(one, index, one)
