@@ -66,7 +66,7 @@ if TYPE_CHECKING:
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 DENSE_ROW_WEIGHT = 2.0**-50  # the weight of an equation coupled to every instance (see above)
-KEEP_RATIO = 8.0  # factors kept while c_j stays within this factor of theirs (see above)
+KEEP_RATIO = 16.0  # factors kept while c_j stays within this factor of theirs (see above)
 
 
 class GGLNewton:
@@ -127,6 +127,7 @@ class GGLNewton:
         n, m = model.n, model.m
         self.hrows = np.asarray(hrows, dtype=np.int64)
         mh = self.hrows.size
+        self._every = bool(np.array_equal(self.hrows, np.arange(m)))  # (slices, not gathers)
         self.n, self.m, self.mh = n, m, mh
         self.size = 2 * n + m + mh
         self.regularization = regularization / float(self.size) ** 2
@@ -170,6 +171,8 @@ class GGLNewton:
     def _split(self, y: np.ndarray) -> tuple:
         n, m, s = self.n, self.m, self.scale
         lam = y[2 * n : 2 * n + m] * s
+        if self._every:  # every row a position constraint, in order
+            return y[:n], y[n : 2 * n], lam, y[2 * n + m :] * s
         mu = np.zeros(m)
         mu[self.hrows] = y[2 * n + m :] * s
         return y[:n], y[n : 2 * n], lam, mu
@@ -196,7 +199,7 @@ class GGLNewton:
         r2 -= forcing
         self._transpose_product(avals, lam, r2)
         res[2 * n : 2 * n + m] = model.a_matvec(avals, v) + b
-        res[2 * n + m :] = f[self.hrows]
+        res[2 * n + m :] = f if self._every else f[self.hrows]
         res[self.dense_rows] *= DENSE_ROW_WEIGHT
 
     # ------------------------------------------------------------------ the Newton matrix
