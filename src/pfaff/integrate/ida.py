@@ -21,7 +21,7 @@ derivatives of each template's outputs by differences in its local coordinates),
 exactly (a band with a dense border, :mod:`pfaff.numeric.bordered`, or SciPy's SuperLU) as the
 preconditioner of IDA's GMRES, which then converges in one iteration until c_j drifts; the
 factors are kept over several steps, and over IDA's own requests while c_j stays within a factor
-8 of theirs (``KEEP_RATIO``: GMRES iterates a little more, 4 factorizations instead of 14 on the
+16 of theirs (``KEEP_RATIO``: GMRES iterates a little more, 3 factorizations instead of 14 on the
 ring of 2^16); its first step comes from the local error of IDA's
 first-order start (:func:`first_step`). scikit-sundae's ``linsolver="sparse"`` (SuperLU_MT with
 this matrix as ``jacfn``) did as well as SuperLU in time (ring of 2^16, 1 s: 44 steps, 12.4 s

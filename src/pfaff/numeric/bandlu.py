@@ -8,6 +8,15 @@ twice per column, which is most of its time; these loops run inside one call. Im
 first use by :mod:`pfaff.numeric.bordered` (numba then loads, from its on-disk cache after the
 first time).
 
+A band at most ``NARROW_L`` = 4 wide below and ``NARROW_K`` = 4 above is stored at exactly
+those widths (its extra places zero) and takes the narrow path: :func:`narrow_factor` (the
+loops' trip counts fixed, so unrolled, and the solve's compact factors written as it goes) and
+:func:`narrow_solve` (the rows still open kept in registers, the right side gathered inside it).
+Both do the general routines' operations in their order, so the same factors and solutions to
+the last bit, in about half the time (the ring's GGL matrix at 2^16 members: a factorization
+11–12 ms against 15.5–17.6, a solve 2.0 ms against 3.4, both from a cold cache where noted
+in the functions).
+
 Examples
 --------
 >>> import numpy as np

@@ -38,8 +38,10 @@ Newton iteration with a fresh matrix) always refactors. On the ring of 2^16, 1 s
 factorizations and 19 steps (14 and 19 refactoring at every request; ratio 2: 8 and 21; 4: 5 and
 22; 8: 4 and 23; never: 2 and 26); ratio 6, 5 factorizations and 23 steps, 8–15 % less time than
 3 on an idle machine (``benchmarks/ida_ring.py`` alternated, 2.41–2.75 s against 2.62–3.02 s);
-ratio 8 (today's), 4 factorizations and 23 steps with one residual more, faster than 6 in 8 of 9
-alternated pairs (medians 1.55 against 1.63 s).
+ratio 8, 4 factorizations and 23 steps with one residual more, faster than 6 in 8 of 9
+alternated pairs (medians 1.55 against 1.63 s); ratio 16 (today's, once the band's solves had
+become faster), 3 factorizations and the same 23 steps with two residuals fewer: 1.04 against
+1.17 s, medians of 9 alternated in one process (32: 3 and 23 again).
 
 The algebraic diagonal gets the dense path's regularization (:mod:`pfaff.integrate.ida`) divided
 by size²: ε_i = 1e-8 · s_i / (c_j size²), s_i the largest A_i D⁻¹A_iᵀ (D = diag M) or A_i A_iᵀ
