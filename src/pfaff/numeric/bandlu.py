@@ -13,9 +13,8 @@ those widths (its extra places zero) and takes the narrow path: :func:`narrow_fa
 loops' trip counts fixed, so unrolled, and the solve's compact factors written as it goes) and
 :func:`narrow_solve` (the rows still open kept in registers, the right side gathered inside it).
 Both do the general routines' operations in their order, so the same factors and solutions to
-the last bit, in about half the time (the ring's GGL matrix at 2^16 members: a factorization
-11–12 ms against 15.5–17.6, a solve 2.0 ms against 3.4, both from a cold cache where noted
-in the functions).
+the last bit, in about half the time or less (the ring's GGL matrix at 2^16 members: see
+the two functions).
 
 Examples
 --------
@@ -174,8 +173,10 @@ def narrow_factor(
     (n, NARROW_U + 1), U by rows); zero past the matrix. The same operations on the same values
     as :func:`band_factor` and :func:`band_split` (the zeros past the matrix's last row are
     never a pivot, and multiply as zeros), so the same factors to the last bit; the ring's GGL
-    matrix at 2^16 members in 10 ms against 24 + 7. Returns 0, or j + 1 where column j has no
-    pivot whose reciprocal is finite."""
+    matrix at 2^16 members from a cold cache in 11–12 ms, against 15.5–17.6 for these loops
+    followed by a separate compacting pass (and 24 + 7 ms, warm, for :func:`band_factor` and
+    :func:`band_split`). Returns 0, or j + 1 where column j has no pivot whose reciprocal is
+    finite."""
     n = ab.shape[0]
     kv = NARROW_L + NARROW_K
     ju = 0
@@ -222,7 +223,7 @@ def narrow_solve(
 
     The same operations in the same order as :func:`band_solve`'s on one right side, so the
     same result to the last bit, in about 40 % of its time (the ring's GGL matrix at 2^16
-    members: 2.3 ms against 5.5): the rows still open are kept in registers instead of memory,
+    members, warm: 2.0 ms against 5.2–5.8; 4.0 ms from a cold cache): the rows still open are kept in registers instead of memory,
     written out for ``NARROW_L`` = 4 and ``NARROW_U`` = 8 (the few zeros past a row's own width
     multiplied in). Forward, w0 … w4 are rows j … j + 4 of the partly eliminated right side
     (row j + 4 is first met at column j: it is gathered from r there), the interchange a

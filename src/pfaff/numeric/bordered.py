@@ -305,6 +305,7 @@ def _load_bandlu() -> ModuleType:
     narrow = np.ones((1, 2 * bandlu.NARROW_L + bandlu.NARROW_K + 1))
     bandlu.narrow_factor(narrow, lower, off, upper)
     bandlu.narrow_solve(lower, off, upper, fixed, index, x)  # (a right side of IDA's)
+    bandlu.narrow_solve(lower, off, upper, one, index, x)  # (another caller's)
     bandlu.narrow_solve(lower, off, upper, one, piv, one)  # (a column of the border's)
     bandlu.sum_into(one, index, one)
     bandlu.gather(one, fixed, index)
