@@ -7,9 +7,10 @@ it, and measures:
 ``build``
     model -> equations -> compiled :class:`pfaff.numeric.structured.StructuredModel`, seconds
 ``solve``
-    one ``model.accelerations(t, q, q̇)`` (q̈ and λ), best of 3, seconds
+    one ``model.accelerations(t, q, q̇)`` (q̈ and λ), best of 5, seconds
 ``floor``
-    the memory-bandwidth floor measured in the same process: the best time to copy with NumPy
+    the memory-bandwidth floor measured in the same process, in rounds alternated with the
+    solve's (a slow minute on the shared machine slows both): the best time to copy with NumPy
     (``np.copyto`` into arrays allocated and written before the clock starts, so that no page
     fault is timed) every array the solve cannot avoid touching once: the state q and q̇, the
     results q̈ and λ, and the model's state-dependent matrix arrays (the values of M and A that vary
@@ -45,28 +46,36 @@ SIZES = [1000, 10_000, 100_000, 1_000_000, 2**20, 2**22, 2**24]
 M_, R_, F_ = 1.0, 0.5, 2.0
 
 
-def best(fn, repeat: int = 3) -> float:
-    """Best wall time of ``repeat`` calls."""
-    out = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        out = min(out, time.perf_counter() - t0)
-    return out
+def clocked(fn) -> float:
+    """Wall time of one call."""
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
 
 
-def floor_time(model, arrays: list) -> float:
-    """Time to stream every unavoidable array once (state, results, varying matrix values) with
-    ``np.copyto`` into memory that exists already (touched before the clock starts): a copy
-    into fresh pages (``ndarray.copy``) also pays the kernel's page faults, which the solve,
-    writing into its scratch arrays, does not, and made the floor several times too slow."""
+def paired(solve, floor, rounds: int = 5) -> tuple[float, float]:
+    """Best wall time of ``solve`` and of ``floor`` over ``rounds`` rounds that alternate them (the
+    machine is shared: a slow minute then slows both, not one)."""
+    best_solve = best_floor = float("inf")
+    for _ in range(rounds):
+        best_solve = min(best_solve, clocked(solve))
+        best_floor = min(best_floor, clocked(floor))
+    return best_solve, best_floor
+
+
+def floor_copies(model, arrays: list):
+    """The floor's copies: stream every unavoidable array once (state, results, varying matrix
+    values) with ``np.copyto`` into memory that exists already (touched before the clock
+    starts): a copy into fresh pages (``ndarray.copy``) also pays the kernel's page faults,
+    which the solve, writing into its scratch arrays, does not, and made the floor several times
+    too slow."""
     import numpy as np
 
     varying = [part.kernel._out for part in model.dyn if part.kernel._out is not None]
     varying += [part.acc._out for part in model.con if part.acc._out is not None]
     todo = list(arrays) + varying
     into = [np.ones_like(a) for a in todo]  # (ones: every page written once now)
-    return best(lambda: [np.copyto(b, a) for a, b in zip(todo, into, strict=True)])
+    return lambda: [np.copyto(b, a) for a, b in zip(todo, into, strict=True)]
 
 
 def spsolve_time(model, q, qd) -> float:
@@ -97,10 +106,10 @@ def one(n: int, spsolve_max: int) -> dict:
     model = ring.equations().compile({"M": M_, "r": R_, "F": F_})
     build = time.perf_counter() - t0
     q, qd = pfaff.models.ring_state(n, R_, theta=np.pi, theta_dot=0.7)
-    out: list = []
-    solve = best(lambda: out.append(model.accelerations(0.0, q, qd)))
-    qdd, lam = out[-1]
-    floor = floor_time(model, [q, qd, qdd, lam])
+    qdd, lam = model.accelerations(0.0, q, qd)  # (the results' arrays, for the floor's copies)
+    solve, floor = paired(
+        lambda: model.accelerations(0.0, q, qd), floor_copies(model, [q, qd, qdd, lam])
+    )
     f, g = model.constraint_residual(0.0, q, qd)
     acc = model.acceleration_residual(0.0, q, qd, qdd)
     exact = F_ / (2 * M_ * R_)
