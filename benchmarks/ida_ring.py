@@ -16,7 +16,24 @@ others), whose DAE leaves that row out (``model.dae_model``) and takes the same 
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-28 at the end of the day on an idle machine (load average 0.3-0.6), CPU
+Measured 2026-11-28 (the next session) on an idle machine (load average 0.5-1.0), CPU seconds,
+medians of five, with the narrow band path (:mod:`pfaff.numeric.bandlu`: fixed widths, the open
+rows in registers, the compact factors written by the factorization) and ``KEEP_RATIO`` = 16::
+
+          N    proj s     ida s  ida/proj   ida 1st ida steps  factor.  proj err   ida err
+       1024     0.018     0.042       2.3     0.048        23        3   6.7e-16   3.7e-09
+      16384     0.075     0.249       3.3     0.314        23        3   2.9e-15   3.7e-09
+      65536     0.102     0.899       8.8     1.205        23        3   1.1e-15   3.7e-09
+
+and at 2^16 in other runs the same hour 7.9, 8.2, 8.7 and 9.0x (0.93-1.08 s); the code before
+(954f581), alternated with it in the same minutes: 1.26-1.49 s, 9.7-12.6x. The closed ring
+6.1-7.7x (1.30-1.46 s). A run at 2^16 is now about a third IDA's own vector work (17 ms a step
+at 262 146 unknowns even for a trivial residual: memory-bound), a quarter the 46 preconditioner
+solves (4.3 ms the band's, from memory, 1 ms the border's), 15 % the residuals and 15 % the 3
+factorizations (50 ms each: the terms' values 15, their assembly 13, the band 11, the border's
+two columns 9).
+
+Earlier, at the end of the previous session, on an idle machine (load average 0.3-0.6), CPU
 seconds, medians of three, two runs (``KEEP_RATIO`` = 8; the pattern and band plan kept by the
 model, λ and μ scaled under one scalar tolerance, single right sides by a vector loop, the
 work integral at the power's coordinates)::
