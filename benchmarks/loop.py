@@ -2,7 +2,10 @@
 
 Two targets, each timed in rounds that alternate the contenders (CPU time,
 ``time.process_time``, medians over ``--rounds``; compile and first-call costs excluded: every
-contender runs once before the clock starts):
+contender runs once before the clock starts; A01's compiled loop 20 times a round, per call, so
+that it is timed over about as long as ``solve_ivp``: timed once a round, over 0.06-0.1 s, a
+burst of the shared machine's load fell on it alone, and the ratio ran from 17 to 31 the same
+hour):
 
 ``A01``
     :func:`pfaff.models.cartesian_pendulum` (m = 1, g = 9.81, L = 1) released from the
@@ -69,17 +72,25 @@ def python_path(fn: Callable[[], object]) -> Callable[[], object]:
     return run
 
 
-def timed(fns: dict[str, Callable[[], object]], rounds: int) -> dict[str, float]:
-    """Median CPU seconds per call over ``rounds``, the callables alternating in each round."""
+def timed(
+    fns: dict[str, Callable[[], object]], rounds: int, calls: dict[str, int] | None = None
+) -> dict[str, float]:
+    """Median CPU seconds per call over ``rounds``, the callables alternating in each round;
+    ``calls[name]`` calls of a callable per round (default 1), so that a fast contender is timed
+    over about as long as a slow one and a burst of the shared machine's load weighs on both
+    alike."""
+    calls = calls or {}
     for fn in fns.values():
         fn()  # warm: compiled, loaded, cached
     times: dict[str, list[float]] = {k: [] for k in fns}
     names = list(fns)
     for r in range(rounds):
         for name in names if r % 2 == 0 else reversed(names):
+            k = calls.get(name, 1)
             start = time.process_time()
-            fns[name]()
-            times[name].append(time.process_time() - start)
+            for _ in range(k):
+                fns[name]()
+            times[name].append((time.process_time() - start) / k)
     return {k: statistics.median(v) for k, v in times.items()}
 
 
@@ -98,7 +109,7 @@ def a01(rounds: int) -> None:
         return pfaff.simulate(model, [1.0, 0.0], [0.0, 0.0], (0, 2000.0), t_eval=te)
 
     fns = {"pfaff (compiled loop)": run, "pfaff (Python path)": python_path(run), "ivp": ivp}
-    t = timed(fns, rounds)
+    t = timed(fns, rounds, {"pfaff (compiled loop)": 20})  # (about ivp's 2 s a round)
     exact = ivp(1e-13, 1e-13).y[0]
     bob = np.column_stack([np.sin(exact), -np.cos(exact)])
     err = {
