@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import pfaff
+from pfaff.numeric import trigjit
 from pfaff.numeric.ggl import DENSE_ROW_WEIGHT, GGLNewton
 
 N = 16  # (from 16 members on, the x row counts as dense: max(16, 4 √size) entries)
@@ -126,3 +127,34 @@ def test_runs_of_one_model_share_its_pattern_not_their_factors() -> None:
     # another parameter value is another model: its own pattern
     other = model.with_parameters({"F": 3.0}).for_run()
     assert GGLNewton(other, np.arange(4096), 0.0, y, yp).shape is not a.shape
+
+
+def test_local_outputs_are_the_kernels_outputs(monkeypatch) -> None:
+    """A template kernel's outputs from its local arguments (what the Newton matrix's
+    differences perturb) equal its outputs over the streams, per instance, at an irregular
+    state: with sin and cos of each angle taken once per array by the compiled pass (the
+    thresholds lowered so that a small ring has it), by NumPy, and not hoisted at all."""
+    from pfaff.numeric import streams
+    from pfaff.numeric.streams import take
+
+    rng = np.random.default_rng(5)
+    for sincos_from, jit_from in ((1, 1), (1, 10**9), (10**9, 10**9)):
+        monkeypatch.setattr(streams, "SINCOS_FROM", sincos_from)
+        monkeypatch.setattr(streams, "JIT_FROM", jit_from)
+        ring = pfaff.models.rolling_ring(N, force=True, family=True).equations()
+        ring = ring.compile({"M": 1.3, "r": 0.5, "F": 2.0}).for_run()
+        q = rng.uniform(-3.0, 3.0, ring.n)
+        qd = rng.standard_normal(ring.n)
+        kernels = [p.kernel for p in ring.dyn] + [p.res for p in ring.con]
+        assert any(k.angles for k in kernels) == (sincos_from == 1)
+        checked = 0
+        for part in kernels:
+            whole = [w if np.ndim(w) == 0 else np.array(w) for w in part(0.3, q, qd)]
+            args = [take(c, q) for c in part.columns] + [take(c, qd) for c in part.columns]
+            for e, (a, b) in enumerate(zip(whole, part.local(0.3, args), strict=True)):
+                if part.const[e] is None and np.ndim(a) == 1:
+                    np.testing.assert_allclose(np.broadcast_to(b, a.shape), a, rtol=1e-15)
+                    checked += 1
+            if part.angles and jit_from == 1 and trigjit.compiled() is not None:
+                assert callable(part._jit)  # (the compiled pass did run)
+        assert checked == 3  # (every per-instance output that varies with the state)

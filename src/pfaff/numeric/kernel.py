@@ -244,8 +244,15 @@ class StreamKernel:
         if self._fn is None:
             return res
         trig: list = []
-        if self.angles:
-            for a in self._angle_fn(*args, t_):
+        if self.angles and self._jit is False:
+            self._jit = compiled()
+        for a in self._angle_fn(*args, t_) if self.angles else ():
+            if self._jit and np.ndim(a) == 1:  # (one compiled pass, as __call__'s)
+                a = np.asarray(a, dtype=float)
+                s, c = np.empty(a.size), np.empty(a.size)
+                jit_sincos(self._jit, a, s, c, np.empty(a.size))
+                trig += [s, c]
+            else:
                 trig += [np.sin(a), np.cos(a)]
         try:
             values = self._fn(*args, t_, *trig, *self._params)
