@@ -29,7 +29,7 @@ and at 2^16 in other runs the same hour 7.9, 8.2, 8.7 and 9.0x (0.93-1.08 s); th
 (954f581), alternated with it in the same minutes: 1.26-1.49 s, 9.7-12.6x. The closed ring
 6.1-7.7x (1.30-1.46 s). A run at 2^16 is now about a third IDA's own vector work (17 ms a step
 at 262 146 unknowns even for a trivial residual: memory-bound), a quarter the 46 preconditioner
-solves (4.3 ms the band's, from memory, 1 ms the border's), 15 % the residuals and 15 % the 3
+solves (about 6 ms each: 4.3 ms the band's, from memory, the rest the border's and the call's), 15 % the residuals and 15 % the 3
 factorizations (50 ms each: the terms' values 15, their assembly 13, the band 11, the border's
 two columns 9).
 

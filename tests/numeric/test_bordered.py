@@ -55,22 +55,30 @@ def test_the_ring_matrix_is_a_band_with_a_border_of_x(newton) -> None:
     np.testing.assert_allclose(z, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
 
 
-def test_compiled_loops_agree_with_lapack(monkeypatch) -> None:
-    """numba's band LU (used from COMPILED_FROM on) and LAPACK's dgbtrf/dgbtrs give the same
-    solution of a bordered band, with row interchanges (the band is not dominant by rows)."""
+@pytest.mark.parametrize(("kl", "ku", "narrow"), [(2, 1, True), (5, 3, False), (2, 6, False)])
+def test_compiled_loops_agree_with_lapack(monkeypatch, kl, ku, narrow) -> None:
+    """numba's band LU (used from COMPILED_FROM on: the narrow path for a band at most 4 wide
+    either side, stored at those widths, else the general loops) and LAPACK's dgbtrf/dgbtrs
+    give the same solution of a bordered band, with row interchanges (the band is not dominant
+    by rows), factored twice in a row (the kept buffers and factors reused)."""
     rng = np.random.default_rng(11)
-    J = _bordered(300, rng)
+    J = _bordered(300, rng, kl, ku)
     J = sps.csc_matrix(J.multiply(rng.uniform(0.1, 10.0, (300, 1))))  # pivots move
     J.sort_indices()
     r = rng.standard_normal(300)
-    solutions = []
-    for start in (10**9, 0):
+    solutions: list = []
+    band: BorderedBand | None = None
+    for start in (10**9, 0, 0):
         monkeypatch.setattr(bordered, "COMPILED_FROM", start)
-        band = BorderedBand.plan(J, dense=20)
+        if len(solutions) < 2:  # (the third time, the second's band again)
+            band = BorderedBand.plan(J, dense=20)
         assert band is not None and band.border.tolist() == [0]
+        assert ((band.kl, band.ku) == (4, 4)) == (start == 0 and narrow)  # (stored widths)
         flat = band.assemble(band.positions, J.data)
         assert band.factor(flat)
+        assert band._narrow == (start == 0 and narrow)
         solutions.append(band.solve(r))
+    np.testing.assert_array_equal(solutions[2], solutions[1])
     np.testing.assert_allclose(solutions[1], solutions[0], rtol=1e-11, atol=1e-12)
     np.testing.assert_allclose(J @ solutions[1], r, rtol=0, atol=1e-10)
 
@@ -132,8 +140,8 @@ def upper_rows(upper: np.ndarray) -> np.ndarray:
 def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
     """The narrow factorization and solve (fixed widths, U by rows, the gather inside) do
     band_factor's and band_solve's operations in their order, with row interchanges: the same
-    pivots and the same result bit for bit, from
-    a right side in another order (gathered) or in band order (an empty order); and it solves
+    pivots and the same result to the last bit (as values: a zero's sign may differ), from
+    a right side in another order (gathered) or in band order (the identity order, in place); and it solves
     the matrix it factored."""
     kernels = bordered._kernels()
     if kernels is None:

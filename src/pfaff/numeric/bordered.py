@@ -97,6 +97,7 @@ class BorderedBand:
         self._buffer: np.ndarray | None = None
         self._factors: tuple = ()  # the compiled path's compact L and U (bandlu)
         self._x = np.empty(0)  # the narrow solve's buffer
+        self._narrow = False  # the factors are bandlu.narrow_factor's
 
     @classmethod
     def plan(
@@ -209,7 +210,7 @@ class BorderedBand:
         if kernels is None:
             y = r[self.order]
             self._band_solve(y.reshape(1, self.nb))
-        elif len(factors) == 3:  # the narrow solve gathers r itself, into its own buffer
+        elif self._narrow:  # the narrow solve gathers r itself, into its own buffer
             kernels.narrow_solve(*factors, r, self.order, self._x)
             y = self._x
         else:
@@ -235,10 +236,12 @@ class BorderedBand:
         which also writes the factors its solve reads), LAPACK's ``dgbtrf`` otherwise."""
         kernels = _kernels() if self.nb >= COMPILED_FROM else None
         nb = self.nb
+        widths = (self.kl, self.ku)
+        self._narrow = kernels is not None and widths == (kernels.NARROW_L, kernels.NARROW_K)
         if kernels is None:
             ab = band.reshape(nb, self.ldab).T  # Fortran order, a view
             ab, piv, info = lapack.dgbtrf(ab, self.kl, self.ku, overwrite_ab=1)
-        elif (self.kl, self.ku) == (kernels.NARROW_L, kernels.NARROW_K):
+        elif self._narrow:
             if not self._factors:  # (kept between factorizations)
                 self._factors = (
                     np.empty((nb, kernels.NARROW_L)), np.empty(nb, dtype=np.int8),
@@ -271,7 +274,7 @@ class BorderedBand:
         """b ← B⁻¹ b in place, b of shape (columns, nb) (a right side per row), C-contiguous;
         returns b."""
         kernels, ab, piv = self._band
-        if kernels is not None and len(ab) == 3:
+        if kernels is not None and self._narrow:
             identity = np.arange(self.nb)
             for row in b:  # in place
                 kernels.narrow_solve(*ab, row, identity, row)
