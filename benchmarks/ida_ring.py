@@ -16,22 +16,25 @@ others), whose DAE leaves that row out (``model.dae_model``) and takes the same 
 Then the sizes IDA still refuses, with the estimate it gives (:mod:`pfaff.integrate.feasible`).
 The issue's target is IDA within 10x the projection method's time at N = 2^16.
 
-Measured 2026-11-28 (the next session) on an idle machine (load average 0.5-1.0), CPU seconds,
+Measured 2026-11-28 (the next session) on an idle machine (load average 0.0-1.0), CPU seconds,
 medians of five, with the narrow band path (:mod:`pfaff.numeric.bandlu`: fixed widths, the open
-rows in registers, the compact factors written by the factorization) and ``KEEP_RATIO`` = 16::
+rows in registers, the compact factors written by the factorization), ``KEEP_RATIO`` = 16 and
+the Newton matrix's local differences taking sin and cos in the compiled pass::
 
           N    proj s     ida s  ida/proj   ida 1st ida steps  factor.  proj err   ida err
-       1024     0.018     0.042       2.3     0.048        23        3   6.7e-16   3.7e-09
-      16384     0.075     0.249       3.3     0.314        23        3   2.9e-15   3.7e-09
-      65536     0.102     0.899       8.8     1.205        23        3   1.1e-15   3.7e-09
+       1024     0.011     0.028       2.5     0.032        23        3   6.7e-16   3.7e-09
+       4096     0.019     0.067       3.5     0.088        23        3   1.1e-15   3.7e-09
+      16384     0.055     0.230       4.2     0.295        23        3   2.9e-15   3.7e-09
+      65536     0.104     0.961       9.2     1.216        23        3   1.1e-15   3.7e-09
 
-and at 2^16 in other runs the same hour 7.9, 8.2, 8.7 and 9.0x (0.93-1.08 s); the code before
-(954f581), alternated with it in the same minutes: 1.26-1.49 s, 9.7-12.6x. The closed ring
-6.1-7.7x (1.30-1.46 s). A run at 2^16 is now about a third IDA's own vector work (17 ms a step
-at 262 146 unknowns even for a trivial residual: memory-bound), a quarter the 46 preconditioner
-solves (about 6 ms each: 4.3 ms the band's, from memory, the rest the border's and the call's), 15 % the residuals and 15 % the 3
-factorizations (50 ms each: the terms' values 15, their assembly 13, the band 11, the border's
-two columns 9).
+and at 2^16 in three more runs the same hour, alternated with the code before (954f581): 7.8,
+6.8 and 7.6x (1.07, 0.88 and 0.98 s) against its 10.9, 10.9 and 9.8x (1.34, 1.16 and 1.42 s);
+the projection method's own time moved between 0.104 and 0.145 s across these runs. The
+closed ring 5.9x (1.23 s). A run at 2^16 is now about a third IDA's own vector work (17 ms a
+step at 262 146 unknowns even for a trivial residual: memory-bound), 30 % the 46 preconditioner
+solves (about 6 ms each: 4.3 ms the band's, from memory, the rest the border's and the call's),
+15 % the residuals and 12 % the 3 factorizations (about 40 ms each: the terms' values 8, their
+assembly 13, the band 11, the border's two columns 9).
 
 Earlier, at the end of the previous session, on an idle machine (load average 0.3-0.6), CPU
 seconds, medians of three, two runs (``KEEP_RATIO`` = 8; the pattern and band plan kept by the
