@@ -276,6 +276,7 @@ class BorderedBand:
         kernels, ab, piv = self._band
         if kernels is not None and self._narrow:
             identity = np.arange(self.nb)
+            identity.flags.writeable = False  # (the plan's order's type: one compiled version)
             for row in b:  # in place
                 kernels.narrow_solve(*ab, row, identity, row)
         elif kernels is not None:
@@ -308,8 +309,7 @@ def _load_bandlu() -> ModuleType:
     narrow = np.ones((1, 2 * bandlu.NARROW_L + bandlu.NARROW_K + 1))
     bandlu.narrow_factor(narrow, lower, off, upper)
     bandlu.narrow_solve(lower, off, upper, fixed, index, x)  # (a right side of IDA's)
-    bandlu.narrow_solve(lower, off, upper, one, index, x)  # (another caller's)
-    bandlu.narrow_solve(lower, off, upper, one, piv, one)  # (a column of the border's)
+    bandlu.narrow_solve(lower, off, upper, one, index, one)  # (a border column's, in place)
     bandlu.sum_into(one, index, one)
     bandlu.gather(one, fixed, index)
     bandlu.scatter_border(one, one, ab, one, index, index, piv)
