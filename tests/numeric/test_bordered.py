@@ -140,9 +140,9 @@ def upper_rows(upper: np.ndarray) -> np.ndarray:
 def test_the_narrow_solve_is_the_band_solve_to_the_last_bit(kl, ku) -> None:
     """The narrow factorization and solve (fixed widths, U by rows, the gather inside) do
     band_factor's and band_solve's operations in their order, with row interchanges: the same
-    pivots and the same result to the last bit (as values: a zero's sign may differ), from
-    a right side in another order (gathered) or in band order (the identity order, in place); and it solves
-    the matrix it factored."""
+    pivots and the same result to the last bit (as values: a zero's sign may differ), from a
+    right side in another order (gathered) or in band order (the identity order, in place); and
+    it solves the matrix it factored."""
     kernels = bordered._kernels()
     if kernels is None:
         pytest.skip("numba is not installed")

@@ -13,8 +13,8 @@ those widths (its extra places zero) and takes the narrow path: :func:`narrow_fa
 loops' trip counts fixed, so unrolled, and the solve's compact factors written as it goes) and
 :func:`narrow_solve` (the rows still open kept in registers, the right side gathered inside it).
 Both do the general routines' operations in their order, so the same factors and solutions to
-the last bit (a zero's sign aside: an added zero product can turn −0 into +0), in about half the time or less (the ring's GGL matrix at 2^16 members: see
-the two functions).
+the last bit (a zero's sign aside: an added zero product can turn −0 into +0), in about half
+the time or less (the ring's GGL matrix at 2^16 members: see the two functions).
 
 Examples
 --------
@@ -172,11 +172,11 @@ def narrow_factor(
     (n, NARROW_L)), ``upper[j, 0]`` = 1 / U[j, j] and ``upper[j, i]`` = U[j, j + i] (shape
     (n, NARROW_U + 1), U by rows); zero past the matrix. The same operations on the same values
     as :func:`band_factor` and :func:`band_split` (the zeros past the matrix's last row are
-    never a pivot, and multiply as zeros), so the same factors to the last bit (up to a zero's sign); the ring's GGL
-    matrix at 2^16 members from a cold cache in 11–12 ms, against 15.5–17.6 for these loops
-    followed by a separate compacting pass (and 24 + 7 ms, warm, for :func:`band_factor` and
-    :func:`band_split`). Returns 0, or j + 1 where column j has no pivot whose reciprocal is
-    finite."""
+    never a pivot, and multiply as zeros), so the same factors to the last bit (up to a zero's
+    sign); the ring's GGL matrix at 2^16 members from a cold cache in 11–12 ms, against
+    15.5–17.6 for these loops followed by a separate compacting pass (and 24 + 7 ms, warm, for
+    :func:`band_factor` and :func:`band_split`). Returns 0, or j + 1 where column j has no
+    pivot whose reciprocal is finite."""
     n = ab.shape[0]
     kv = NARROW_L + NARROW_K
     ju = 0
@@ -223,9 +223,9 @@ def narrow_solve(
 
     The same operations in the same order as :func:`band_solve`'s on one right side, so the
     same result to the last bit (a zero's sign aside: x − 0·y turns a −0 into +0, where
-    :func:`band_solve` skips the product), in about 40 % of its time (the ring's GGL matrix at 2^16
-    members, warm: 2.0 ms against 5.2–5.8; 4.0 ms from a cold cache): the rows still open are kept in registers instead of memory,
-    written out for ``NARROW_L`` = 4 and ``NARROW_U`` = 8 (the few zeros past a row's own width
+    :func:`band_solve` skips the product), in about 40 % of its time (the ring's GGL matrix at
+    2^16 members, warm: 2.0 ms against 5.2–5.8; 4.0 ms from a cold cache): the rows still open
+    are kept in registers instead of memory, written out for ``NARROW_L`` = 4 and ``NARROW_U`` = 8 (the few zeros past a row's own width
     multiplied in). Forward, w0 … w4 are rows j … j + 4 of the partly eliminated right side
     (row j + 4 is first met at column j: it is gathered from r there), the interchange a
     choice among them. Backward, a1 … a8 are the unknowns j + 1 … j + 8 and U is read by rows:
