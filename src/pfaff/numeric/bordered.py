@@ -97,6 +97,7 @@ class BorderedBand:
         self._buffer: np.ndarray | None = None
         self._factors: tuple = ()  # the compiled path's compact L and U (bandlu)
         self._x = np.empty(0)  # the narrow solve's buffer
+        self._identity = np.empty(0, dtype=np.int64)  # its order for the border's columns
         self._narrow = False  # the factors are bandlu.narrow_factor's
 
     @classmethod
@@ -248,6 +249,8 @@ class BorderedBand:
                     np.empty((nb, kernels.NARROW_U + 1)),
                 )  # fmt: skip
                 self._x = np.empty(nb)
+                self._identity = np.arange(nb)
+                self._identity.flags.writeable = False  # (the plan's order's type)
             ab, piv = self._factors, None
             info = kernels.narrow_factor(band.reshape(nb, self.ldab), *ab)
         else:
@@ -275,10 +278,8 @@ class BorderedBand:
         returns b."""
         kernels, ab, piv = self._band
         if kernels is not None and self._narrow:
-            identity = np.arange(self.nb)
-            identity.flags.writeable = False  # (the plan's order's type: one compiled version)
             for row in b:  # in place
-                kernels.narrow_solve(*ab, row, identity, row)
+                kernels.narrow_solve(*ab, row, self._identity, row)
         elif kernels is not None:
             kernels.band_solve(*ab, piv, b)
         else:
